@@ -1,0 +1,13 @@
+rule render_case:
+    """One self-contained YADE script per case, its parameters embedded (re-runnable by hand)."""
+    output:
+        script="results/cases/{case}/case.py",
+    params:
+        scene=lambda wc: CASES[wc.case],
+    log:
+        "results/cases/{case}/render.log",
+    localrule: True
+    conda:
+        "../envs/analysis.yaml"
+    script:
+        "../scripts/render_case.py"

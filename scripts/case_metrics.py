@@ -1,0 +1,10 @@
+"""Snakemake entry: MFR, PD, regime and diagnostics of one case from its raw YADE output."""
+import json
+
+from spreadmap.launcher import write_json_atomically
+from spreadmap.metrics import case_metrics
+
+sm = snakemake  # noqa: F821
+with open(sm.input.raw) as fh:
+    raw = json.load(fh)
+write_json_atomically(sm.output.metrics, case_metrics(raw, sm.params.regime, sm.params.stability))

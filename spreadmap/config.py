@@ -1,0 +1,90 @@
+"""Load and validate config.yaml: Snakemake's `validate` against schemas/config.schema.yaml
+(which also fills defaults), then the checks a schema cannot express. Every error names the key,
+the bad value and what is allowed, in one line."""
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import jsonschema
+import yaml
+
+SCHEMA = Path(__file__).resolve().parent.parent / "schemas" / "config.schema.yaml"
+
+
+class ConfigError(ValueError):
+    """A bad configuration value: the message says which key, what value, what is allowed."""
+
+
+def _key_path(path) -> str:
+    out = ""
+    for part in path:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out or "(top level)"
+
+
+def _describe(error: jsonschema.ValidationError) -> str:
+    key = _key_path(error.absolute_path)
+    allowed = {
+        "enum": lambda s: f"one of {s['enum']}",
+        "minimum": lambda s: f">= {s['minimum']}",
+        "maximum": lambda s: f"<= {s['maximum']}",
+        "exclusiveMinimum": lambda s: f"> {s['exclusiveMinimum']}",
+        "exclusiveMaximum": lambda s: f"< {s['exclusiveMaximum']}",
+        "type": lambda s: f"of type {s['type']}",
+        "required": lambda s: f"present (required keys: {s['required']})",
+        "minProperties": lambda s: f"a mapping with at least {s['minProperties']} entry",
+    }
+    validator = error.validator
+    if validator == "additionalProperties":
+        extra = sorted(set(error.instance) - set(error.schema.get("properties", {})))
+        known = sorted(error.schema.get("properties", {}))
+        where = f"under '{key}'" if error.absolute_path else "at the top level"
+        return f"unknown config key(s) {extra} {where}; allowed keys: {known}"
+    if validator == "required":
+        return f"config key '{key}': {error.message}"
+    rule = allowed.get(validator, lambda s: f"valid per the schema rule '{validator}'")(error.schema)
+    return f"config key '{key}': value {error.instance!r} is not allowed; it must be {rule}"
+
+
+def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
+    """Validate `config` in place with Snakemake's validator (defaults filled), then the
+    cross-key rules. Returns the config. Raises ConfigError with a one-line message."""
+    from snakemake.exceptions import WorkflowError
+    from snakemake.utils import validate as snakemake_validate
+
+    try:
+        snakemake_validate(config, str(schema_path), set_default=True)
+    except WorkflowError:
+        schema = yaml.safe_load(Path(schema_path).read_text())
+        validator = jsonschema.Draft202012Validator(schema)
+        error = jsonschema.exceptions.best_match(validator.iter_errors(config))
+        raise ConfigError(_describe(error) if error else "config does not match its schema") from None
+    _check_cross_keys(config)
+    return config
+
+
+def _check_cross_keys(config: dict) -> None:
+    presets = config["presets"]
+    if config["preset"] not in presets:
+        raise ConfigError(f"config key 'preset': value {config['preset']!r} is not allowed; "
+                          f"it must be one of the presets defined: {sorted(presets)}")
+    for name, case in (config.get("cases") or {}).items():
+        if "preset" in case and case["preset"] not in presets:
+            raise ConfigError(f"config key 'cases.{name}.preset': value {case['preset']!r} is not allowed; "
+                              f"it must be one of {sorted(presets)}")
+    for name, rng in (config.get("ranges") or {}).items():
+        if not rng["min"] < rng["max"]:
+            raise ConfigError(f"config key 'ranges.{name}': min {rng['min']} must be below max {rng['max']}")
+    for name, preset in presets.items():
+        if preset["window_d"] < config["scene"]["blade_thickness_d"]:
+            raise ConfigError(f"config key 'presets.{name}.window_d': value {preset['window_d']} is not allowed; "
+                              f"the PD box spans the window and must be at least the blade thickness "
+                              f"(scene.blade_thickness_d = {config['scene']['blade_thickness_d']})")
+
+
+def load(path: Path | str) -> dict:
+    """Read a YAML config file and validate it."""
+    with open(path) as fh:
+        config = yaml.safe_load(fh) or {}
+    return validate(copy.deepcopy(config))

@@ -1,0 +1,85 @@
+"""Run a rendered case script with Debian's YADE, kept away from the project's venv.
+
+YADE runs its own system Python: VIRTUAL_ENV, PYTHONPATH and PYTHONHOME are cleared and the venv
+is taken off PATH; one thread (-j1, OMP_NUM_THREADS=1) because two single-threaded cases at once
+beat one case on two threads. An outer timeout kills the whole process group: a blown-up run can
+hang inside YADE, out of reach of the in-run watchdog."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+EXIT_CODES = {0: "ok", 2: "refused", 3: "blown", 4: "failed"}
+
+
+def yade_executable() -> str:
+    exe = os.environ.get("SPREADMAP_YADE") or shutil.which("yade", path=clean_environment()["PATH"])
+    if not exe:
+        raise FileNotFoundError("Debian's `yade` is not on PATH: run `bash tools/setup.sh` (apt-get install yade)")
+    return exe
+
+
+def clean_environment() -> dict:
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("VIRTUAL_ENV", "PYTHONPATH", "PYTHONHOME", "CONDA_PREFIX", "PYTHONSTARTUP")}
+    venv_bins = {str(Path(sys.prefix) / "bin"), os.environ.get("VIRTUAL_ENV", "") + "/bin"}
+    env["PATH"] = os.pathsep.join(p for p in os.environ.get("PATH", "").split(os.pathsep) if p and p not in venv_bins)
+    env["OMP_NUM_THREADS"] = "1"
+    env.setdefault("HOME", "/tmp")
+    return env
+
+
+def run_case(script: Path | str, raw_out: Path | str, log_path: Path | str, timeout_s: float) -> dict:
+    """Run one case; returns {"exit_code", "outcome", "wall_time", "reason"}. The raw result (written
+    by the YADE script itself, atomically) exists after outcomes "ok" and "blown"."""
+    script, raw_out, log_path = Path(script), Path(raw_out), Path(log_path)
+    raw_out.parent.mkdir(parents=True, exist_ok=True)
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    cmd = [yade_executable(), "-n", "-j1", "-x", str(script.resolve()), str(raw_out.resolve())]
+    start = time.time()
+    with open(log_path, "w") as log:
+        log.write("$ " + " ".join(cmd) + "\n")
+        log.flush()
+        proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                env=clean_environment(), cwd=str(raw_out.parent), start_new_session=True)
+        try:
+            code = proc.wait(timeout=timeout_s)
+            reason = ""
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+            code, reason = None, f"timed out after {timeout_s:.0f} s wall time (outer timeout); killed"
+            log.write(f"\n[launcher] {reason}\n")
+    outcome = "timeout" if code is None else EXIT_CODES.get(code, "failed")
+    if code not in (None, 0, 3):
+        reason = f"yade exited with code {code} ({outcome}); see {log_path}"
+    if outcome in ("ok", "blown") and not raw_out.exists():
+        outcome, reason = "failed", f"yade exited {code} but wrote no raw result; see {log_path}"
+    return {"exit_code": code, "outcome": outcome, "wall_time": time.time() - start, "reason": reason}
+
+
+def log_tail(log_path: Path | str, lines: int = 15) -> str:
+    try:
+        return "\n".join(Path(log_path).read_text(errors="replace").splitlines()[-lines:])
+    except OSError:
+        return ""
+
+
+def failure_record(params: dict, result: dict, log_path: Path | str) -> dict:
+    """The raw record of a case that produced no result (crash, timeout, refusal)."""
+    return {"format": "spreadmap-raw-1", "status": "failed", "reason": result["reason"] or result["outcome"],
+            "params": params, "wall_time": result["wall_time"], "exit_code": result["exit_code"],
+            "log_tail": log_tail(log_path)}
+
+
+def write_json_atomically(path: Path | str, data: dict) -> None:
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    tmp.write_text(json.dumps(data, indent=1))
+    os.replace(tmp, path)

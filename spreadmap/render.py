@@ -1,0 +1,29 @@
+"""Render the YADE scene template into one self-contained script per case: the template's
+PARAMS block is replaced by the case's parameters, everything else is kept verbatim, so the
+rendered file is readable and re-runnable by hand with `yade -n -x case.py`."""
+from __future__ import annotations
+
+import os
+import pprint
+import re
+from pathlib import Path
+
+TEMPLATE = Path(__file__).resolve().parent.parent / "yade_scripts" / "spreading_case.py"
+_BLOCK = re.compile(r"(# --- case parameters.*?---\n)PARAMS = \{.*?\n\}\n(# --- end of case parameters ---)", re.S)
+
+
+def render(params: dict, template: Path | str = TEMPLATE) -> str:
+    text = Path(template).read_text()
+    if not _BLOCK.search(text):
+        raise ValueError(f"{template}: no PARAMS block between the case-parameter markers")
+    block = "PARAMS = " + pprint.pformat(params, sort_dicts=False, width=100) + "\n"
+    header = f"# --- case parameters of {params['case_id']} (rendered by spreadmap) ---\n"
+    return _BLOCK.sub(lambda m: header + block + m.group(2), text, count=1)
+
+
+def write_atomically(path: Path | str, text: str) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    tmp.write_text(text)
+    os.replace(tmp, path)

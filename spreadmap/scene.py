@@ -1,0 +1,126 @@
+"""Derive every number of one spreading case from its design point, its fidelity preset and the
+configuration: the parameters that the YADE scene script receives (SI units).
+
+Domain sizes are in particle diameters (d). The time step is a fraction (`dt_factor`) of the
+Rayleigh critical step of Hertzian contact for the particles' radius and the density used in the
+simulation; a forced step above the critical one is refused here, before anything runs.
+"""
+from __future__ import annotations
+
+import math
+
+# Densest sphere packing: no solid fraction can exceed it.
+DENSEST_PACKING = math.pi / (3.0 * math.sqrt(2.0))  # 0.7405
+
+
+class UnsafeTimeStep(ValueError):
+    """A forced time step above the critical step of a case."""
+
+
+def rayleigh_time_step(radius: float, density: float, young: float, poisson: float) -> float:
+    """Rayleigh critical step of Hertzian contact: pi R sqrt(rho/G) / (0.1631 nu + 0.8766)."""
+    shear = young / (2.0 * (1.0 + poisson))
+    return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
+
+
+def time_step(diameter: float, density: float, material: dict, preset: dict, preset_name: str) -> tuple[float, float]:
+    """(time step, critical step) for a case; refuses a forced step above the critical one."""
+    critical = rayleigh_time_step(0.5 * diameter, density, material["young_pa"], material["poisson"])
+    forced = preset.get("time_step_s")
+    if forced is None:
+        return preset["dt_factor"] * critical, critical
+    if forced > critical:
+        raise UnsafeTimeStep(
+            f"config key 'presets.{preset_name}.time_step_s': value {forced:g} s is above the Rayleigh "
+            f"critical step {critical:.3e} s of a case with d = {diameter * 1e6:.3g} um at density "
+            f"{density:g} kg/m3; it must be below the critical step (the study's fixed 1e-6 s blows up "
+            f"at every diameter in range). Remove it to use dt_factor x critical step.")
+    return forced, critical
+
+
+def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, seed: int | None = None) -> dict:
+    """The PARAMS dict of the YADE scene script for design point `point`
+    (keys f, d_um, h_um, v_mm_s) at preset `preset_name`."""
+    for key in ("f", "d_um", "h_um", "v_mm_s"):
+        value = point[key]
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise ValueError(f"case {case_id}: parameter {key} = {value!r} must be a positive number")
+    preset = config["presets"][preset_name]
+    material, scene = config["material"], config["scene"]
+    d = point["d_um"] * 1e-6
+    h = point["h_um"] * 1e-6
+    v = point["v_mm_s"] * 1e-3
+    g = material["gravity_m_s2"]
+    density = material["density_kg_m3"] * preset["density_scale"]
+    dt, dt_crit = time_step(d, density, material, preset, preset_name)
+
+    width = preset["width_d"] * d
+    blade = scene["blade_thickness_d"] * d
+    transient = preset["transient_d"] * d
+    window = preset["window_d"] * d
+    heap = preset["heap_height_d"] * d
+    packing = scene["packing_guess"]
+    # The heap ahead of the blade must outlast the window: it holds `heap_reserve` times the most
+    # solid the gap can take (a layer of height h at the densest packing) while the blade travels
+    # the transient, the window and its own thickness.
+    need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + window + blade)
+    pile_length = max(preset["pile_length_min_d"] * d, need / (packing * heap))
+    pile_height = h + heap
+    sphere_volume = math.pi * d ** 3 / 6.0
+    n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))
+    # makeCloud keeps sphere centres one radius inside the box: size the cloud on that inner box
+    # so that it holds n_particles at `cloud_fraction` (it silently places fewer when too tight).
+    inner = (pile_length - d) * (width - d)
+    cloud_height = n_particles * sphere_volume / (scene["cloud_fraction"] * inner) + d
+
+    settle_max = scene["settle_time_factor"] * math.sqrt(2.0 * cloud_height / g)
+    relax_max = scene["relax_time_factor"] * math.sqrt(2.0 * pile_height / g)
+    move_time = (blade + pile_length + transient + window) / v
+    steps = (settle_max + relax_max + move_time) / dt
+    rolling = scene.get("rolling_resistance", {})
+    # rolling stiffness: stiffness_factor x (Hertz normal stiffness at an overlap of 1e-3 R) x R^2
+    r = 0.5 * d
+    e_star = material["young_pa"] / (2.0 * (1.0 - material["poisson"] ** 2))
+    k_n = 2.0 * e_star * math.sqrt(0.5 * r * 1e-3 * r)
+    timeout = preset.get("timeout_s") or 60.0 + scene["timeout_factor"] * n_particles * steps / 2.0e6
+    return {
+        "case_id": case_id,
+        "point": {k: float(point[k]) for k in ("f", "d_um", "h_um", "v_mm_s")},
+        "friction": float(point["f"]),
+        "diameter": d,
+        "gap": h,
+        "blade_speed": v,
+        "density": density,
+        "density_scale": float(preset["density_scale"]),
+        "young": float(material["young_pa"]),
+        "poisson": float(material["poisson"]),
+        "restitution": float(material["restitution"]),
+        "gravity": float(g),
+        "time_step": dt,
+        "critical_time_step": dt_crit,
+        "width": width,
+        "pile_length": pile_length,
+        "pile_height": pile_height,
+        "cloud_height": cloud_height,
+        "n_particles": n_particles,
+        "blade_thickness": blade,
+        "transient_travel": transient,
+        "window_travel": window,
+        "seed": int(scene["seed"] if seed is None else seed),
+        "settle_damping": float(scene["settle_damping"]),
+        "ke_tolerance": float(scene["ke_tolerance"]),
+        "settle_max_time": settle_max,
+        "relax_max_time": relax_max,
+        "max_speed": float(scene["max_speed_m_s"]),
+        "watchdog_every": 50,
+        "control_every": 100,
+        "monitor_every": 1000,
+        "progress_every_s": float(scene["progress_every_s"]),
+        "rolling_resistance": bool(rolling.get("enabled", False)),
+        "rolling_friction": float(rolling.get("rolling_friction", 0.0)),
+        "rolling_stiffness": float(rolling.get("stiffness_factor", 0.0)) * k_n * r * r,
+        "preset": preset_name,
+        "estimated_steps": int(steps),
+        "timeout_s": float(timeout),
+        "stop_after": None,
+    }

@@ -1,0 +1,44 @@
+"""The results table: one row per case (parameters, MFR, PD, regime, diagnostics, preset, wall
+time and peak memory from Snakemake's benchmark), and the run summary built from it."""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pandas as pd
+
+FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
+                 "mfr", "pd", "regime", "flagged", "flag_reason"]
+
+
+def read_benchmark(path: Path | str) -> dict:
+    """Wall time (s) and peak resident memory (MB) of the YADE run, from Snakemake's benchmark file."""
+    try:
+        row = pd.read_csv(path, sep="\t").iloc[-1]
+        return {"benchmark_s": float(row["s"]), "max_rss_mb": float(row["max_rss"])}
+    except (OSError, KeyError, IndexError, ValueError, pd.errors.EmptyDataError):
+        return {"benchmark_s": float("nan"), "max_rss_mb": float("nan")}
+
+
+def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFrame:
+    """labels[i] = {"sweep": ..., "index": ...} for metrics_files[i]."""
+    rows = []
+    for mfile, bfile, label in zip(metrics_files, benchmark_files, labels):
+        with open(mfile) as fh:
+            row = json.load(fh)
+        row.update(label)
+        row.update(read_benchmark(bfile))
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    if table.empty:
+        return pd.DataFrame(columns=FIRST_COLUMNS)
+    return table[FIRST_COLUMNS + [c for c in table.columns if c not in FIRST_COLUMNS]]
+
+
+def write_table(table: pd.DataFrame, path: Path | str) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    table.to_csv(tmp, index=False)
+    os.replace(tmp, path)

@@ -1,0 +1,343 @@
+# One powder-spreading case on YADE (Hertz-Mindlin spheres, a moving recoater blade).
+#
+# Run by hand:   yade -n -x spreading_case.py [RAW_OUTPUT.json]
+# (without an argument the raw result goes to <this script>.raw.json)
+#
+# Protocol (see SPEC.md of spreadmap):
+#   1. settle:  a random loose cloud of equal spheres falls into a box on the floor
+#               (temporary walls at x = 0 and x = pile_length), with NewtonIntegrator
+#               damping switched on only in this phase;
+#   2. relax:   damping off, temporary walls removed, the blade placed with its lower face at
+#               height `gap` and its front face at x = 0; run until the kinetic energy decays;
+#   3. move:    the blade moves in +x at `blade_speed`; powder extrudes through the gap and is
+#               deposited behind it. No artificial damping: only the contact law dissipates;
+#   4. measure: snapshots of all spheres when the blade's rear face passes the start and the end
+#               of the measurement window (beyond the pile and a transient); then stop.
+#
+# This script runs under YADE's own (Debian system) Python. It imports nothing from the
+# spreadmap venv: it simulates and writes raw results (atomically), nothing more. MFR, PD and
+# the regime are computed afterwards by the spreadmap package.
+#
+# Units: SI throughout (m, s, kg).
+import json
+import math
+import os
+import sys
+import time
+
+from yade import O, pack, utils
+from yade import (Bo1_Box_Aabb, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Box_Sphere_ScGeom,
+                  Ig2_Box_Sphere_ScGeom6D, Ig2_Sphere_Sphere_ScGeom, Ig2_Sphere_Sphere_ScGeom6D,
+                  InsertionSortCollider, InteractionLoop,
+                  Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin,
+                  NewtonIntegrator, PyRunner)
+import yade.config
+
+# --- case parameters (written by spreadmap's renderer; the values below are a demo case) ---
+PARAMS = {
+    "case_id": "demo",
+    "friction": 0.3,
+    "diameter": 4e-05,
+    "gap": 6.5e-05,
+    "blade_speed": 0.01,
+    "density": 798000.0,
+    "density_scale": 100.0,
+    "young": 2.1e9,
+    "poisson": 0.3,
+    "restitution": 0.4,
+    "gravity": 9.81,
+    "time_step": 4.0e-07,
+    "critical_time_step": 2.13e-06,
+    "width": 0.00016,
+    "pile_length": 0.00032,
+    "pile_height": 0.0003,
+    "cloud_height": 0.0006,
+    "n_particles": 200,
+    "blade_thickness": 8e-05,
+    "transient_travel": 0.00016,
+    "window_travel": 0.00032,
+    "seed": 1,
+    "settle_damping": 0.4,
+    "ke_tolerance": 0.001,
+    "settle_max_time": 0.05,
+    "relax_max_time": 0.05,
+    "max_speed": 2.0,
+    "watchdog_every": 50,
+    "control_every": 100,
+    "monitor_every": 1000,
+    "progress_every_s": 10.0,
+    "rolling_resistance": False,
+    "rolling_friction": 0.0,
+    "rolling_stiffness": 0.0,
+    "stop_after": None,
+}
+# --- end of case parameters ---
+
+P = PARAMS
+EXIT_OK, EXIT_REFUSED, EXIT_BLOWN, EXIT_FAILED = 0, 2, 3, 4
+out_path = sys.argv[1] if len(sys.argv) > 1 else os.path.splitext(os.path.abspath(sys.argv[0]))[0] + ".raw.json"
+wall_start = time.time()
+
+
+def log(msg):
+    print("[%s] %s" % (P["case_id"], msg))
+    sys.stdout.flush()
+
+
+def rayleigh_step(radius, density, young, poisson):
+    shear = young / (2.0 * (1.0 + poisson))
+    return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
+
+
+def write_atomically(path, data):
+    tmp = path + ".tmp%d" % os.getpid()
+    with open(tmp, "w") as fh:
+        json.dump(data, fh, separators=(",", ":"))
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+
+
+# ---- refuse an unstable step before anything runs -------------------------------------------
+R = 0.5 * P["diameter"]
+dt_crit = rayleigh_step(R, P["density"], P["young"], P["poisson"])
+if P["time_step"] > dt_crit:
+    log("REFUSED: time_step %.3e s is above the Rayleigh critical step %.3e s of this case "
+        "(d = %.1f um, density %.0f kg/m3); lower it below the critical step." %
+        (P["time_step"], dt_crit, P["diameter"] * 1e6, P["density"]))
+    sys.exit(EXIT_REFUSED)
+
+# ---- geometry ---------------------------------------------------------------------------------
+d = P["diameter"]
+W = P["width"]
+L = P["pile_length"]
+h = P["gap"]
+tb = P["blade_thickness"]
+x_window_start = L + P["transient_travel"]          # blade rear face positions
+x_window_end = x_window_start + P["window_travel"]
+x_lo = -tb - 20.0 * d                                # modelled length of the floor
+x_hi = x_window_end + L + 40.0 * d
+z_hi = P["cloud_height"] + 40.0 * d
+sphere_volume = math.pi * d ** 3 / 6.0
+mass = P["density"] * sphere_volume
+ke_scale = P["n_particles"] * mass * P["gravity"] * d  # lifting every sphere by one diameter
+
+O.reset()
+O.dt = P["time_step"]
+frict = FrictMat(young=P["young"], poisson=P["poisson"], density=P["density"],
+                 frictionAngle=math.atan(P["friction"]), label="powder")
+smooth = FrictMat(young=P["young"], poisson=P["poisson"], density=P["density"],
+                  frictionAngle=0.0, label="frictionless")
+O.materials.append(frict)
+O.materials.append(smooth)
+
+cx, span = 0.5 * (x_lo + x_hi), 0.5 * (x_hi - x_lo)
+# floor (friction f, like the powder) and the two frictionless side walls: boxes whose inner
+# faces are at z = 0, y = 0 and y = W.
+O.bodies.append(utils.box((cx, 0.5 * W, -d), (span, 0.5 * W + 2 * d, d), fixed=True, material=frict))
+for yc in (-d, W + d):
+    O.bodies.append(utils.box((cx, yc, 0.5 * z_hi), (span, d, 0.5 * z_hi + d), fixed=True, material=smooth))
+temporary_walls = [
+    O.bodies.append(utils.box((xc, 0.5 * W, 0.5 * P["cloud_height"]), (d, 0.5 * W, 0.5 * P["cloud_height"] + d),
+                              fixed=True, material=smooth))
+    for xc in (-d, L + d)
+]
+
+cloud = pack.SpherePack()
+placed = cloud.makeCloud((0, 0, 0), (L, W, P["cloud_height"]), rMean=R, rRelFuzz=0.0,
+                         num=int(P["n_particles"]), seed=int(P["seed"]))
+if placed != int(P["n_particles"]):
+    log("FAILED: makeCloud placed %d of %d spheres in the cloud box; raise cloud_height" % (placed, P["n_particles"]))
+    sys.exit(EXIT_FAILED)
+sphere_ids = list(cloud.toSimulation(material=frict))
+
+# Hertz normal, Mindlin tangential with the Coulomb cap; viscous damping set by YADE from the
+# restitution coefficient (en, es); rolling resistance (ScGeom6D geometry) only when asked for.
+ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(en=P["restitution"], es=P["restitution"])
+law = Law2_ScGeom_MindlinPhys_Mindlin()
+geometry_functors = [Ig2_Sphere_Sphere_ScGeom(), Ig2_Box_Sphere_ScGeom()]
+if P["rolling_resistance"]:
+    ip2.krot = P["rolling_stiffness"]
+    ip2.eta = P["rolling_friction"]
+    law.includeMoment = True
+    geometry_functors = [Ig2_Sphere_Sphere_ScGeom6D(), Ig2_Box_Sphere_ScGeom6D()]
+
+newton = NewtonIntegrator(gravity=(0, 0, -P["gravity"]), damping=P["settle_damping"])
+O.engines = [
+    ForceResetter(),
+    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()]),
+    InteractionLoop(geometry_functors, [ip2], [law]),
+    newton,
+    PyRunner(command="watchdog()", iterPeriod=int(P["watchdog_every"])),
+    PyRunner(command="control()", iterPeriod=int(P["control_every"])),
+    PyRunner(command="monitor()", iterPeriod=int(P["monitor_every"])),
+]
+
+state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": None,
+         "peak_overlap_ratio": 0.0, "rolled_off": 0, "removed_behind_volume": 0.0, "max_speed_seen": 0.0, "status": None, "reason": "",
+         "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start}
+single_particle_ke_bound = 0.5 * mass * P["max_speed"] ** 2
+
+
+def spheres():
+    return (O.bodies[i] for i in sphere_ids)
+
+
+def blade_rear_x():
+    return O.bodies[state["blade"]].state.pos[0] - 0.5 * tb
+
+
+def max_speed():
+    return max(b.state.vel.norm() for b in spheres())
+
+
+def finish(status, reason=""):
+    state["status"], state["reason"] = status, reason
+    O.pause()
+
+
+def watchdog():
+    """Velocity bound, every few dozen steps. The kinetic energy (computed in C++) is a cheap
+    pre-filter: it exceeds one sphere's energy at the speed bound whenever any sphere does."""
+    ke = utils.kineticEnergy()
+    if not math.isfinite(ke):
+        finish("blown", "non-finite kinetic energy at step %d" % O.iter)
+    elif ke > single_particle_ke_bound:
+        vmax = max_speed()
+        state["max_speed_seen"] = max(state["max_speed_seen"], vmax)
+        if vmax > P["max_speed"]:
+            finish("blown", "a sphere reached %.3g m/s (> max_speed %.3g m/s) at step %d, t = %.4g s"
+                   % (vmax, P["max_speed"], O.iter, O.time))
+
+
+def snapshot():
+    pos = [list(b.state.pos) for b in spheres()]
+    return {"time": O.time, "iter": O.iter,
+            "blade_rear_x": blade_rear_x() if state["blade"] is not None else None,
+            "removed_behind_volume": state["removed_behind_volume"],
+            "positions": pos, "radii": [b.shape.radius for b in spheres()]}
+
+
+def volume_behind(x_rear):
+    """Volume passed behind the blade: spheres behind its rear face, plus those removed after
+    rolling off the back end of the floor."""
+    return state["removed_behind_volume"] + sum(sphere_volume for b in spheres() if b.state.pos[0] < x_rear)
+
+
+def monitor():
+    """Every monitor_every steps: peak overlap, spheres that rolled off the ends of the floor
+    (removed: they would fall and accelerate for ever; the volume of those that had passed behind
+    the blade stays counted as passed), and the volume passed under the blade."""
+    peak = state["peak_overlap_ratio"]
+    for i in O.interactions:
+        if i.isReal:
+            peak = max(peak, i.geom.penetrationDepth / R)
+    state["peak_overlap_ratio"] = peak
+    by_phase = state["max_speed_by_phase"]
+    by_phase[state["phase"]] = max(by_phase.get(state["phase"], 0.0), max_speed())
+    fallen = [b for b in spheres() if b.state.pos[2] < -2.0 * d]
+    for b in fallen:
+        if state["blade"] is not None and b.state.pos[0] < blade_rear_x():
+            state["removed_behind_volume"] += sphere_volume
+        state["rolled_off"] += 1
+        sphere_ids.remove(b.id)
+        O.bodies.erase(b.id)
+    if state["phase"] == "move":
+        x = blade_rear_x()
+        state["behind_series"].append([O.time, x, volume_behind(x)])
+
+
+def kinetic_energy_settled():
+    return utils.kineticEnergy() < P["ke_tolerance"] * ke_scale
+
+
+def start_phase(name):
+    state["phase_times"][state["phase"] + "_end"] = O.time
+    state["phase"], state["phase_start"] = name, O.time
+    log("phase %s at t = %.4g s, step %d" % (name, O.time, O.iter))
+
+
+def control():
+    phase, elapsed = state["phase"], O.time - state["phase_start"]
+    if phase == "settle":
+        if (elapsed > 0.2 * P["settle_max_time"] and kinetic_energy_settled()) or elapsed > P["settle_max_time"]:
+            state["settled_by_time"] = elapsed > P["settle_max_time"]
+            if P.get("stop_after") == "settle":  # a poured bed, for the packing check
+                state["snapshots"]["settled"] = snapshot()
+                finish("ok")
+                return
+            newton.damping = 0.0
+            for wid in temporary_walls:
+                O.bodies.erase(wid)
+            top = max(b.state.pos[2] for b in spheres()) + R
+            state["settled_top"] = top
+            z_top = top + 10.0 * d
+            state["blade"] = O.bodies.append(utils.box(
+                (-0.5 * tb, 0.5 * W, 0.5 * (h + z_top)), (0.5 * tb, 0.5 * W + d, 0.5 * (z_top - h)),
+                fixed=True, material=frict))
+            start_phase("relax")
+    elif phase == "relax":
+        if (elapsed > 0.1 * P["relax_max_time"] and kinetic_energy_settled()) or elapsed > P["relax_max_time"]:
+            state["relaxed_by_time"] = elapsed > P["relax_max_time"]
+            O.bodies[state["blade"]].state.vel = (P["blade_speed"], 0, 0)
+            state["move_start"] = O.time
+            start_phase("move")
+    elif phase == "move":
+        x = blade_rear_x()
+        if "window_start" not in state["snapshots"] and x >= x_window_start:
+            state["snapshots"]["window_start"] = snapshot()
+            log("measurement window opens at t = %.4g s" % O.time)
+        elif "window_start" in state["snapshots"] and x >= x_window_end:
+            state["snapshots"]["window_end"] = snapshot()
+            monitor()
+            finish("ok")
+    now = time.time()
+    if now - state["last_progress"] >= P["progress_every_s"]:
+        state["last_progress"] = now
+        travel = ("blade %.1f of %.1f d" % ((blade_rear_x() + tb) / d, (x_window_end + tb) / d)
+                  if phase == "move" else "")
+        log("progress phase=%s t=%.4g s steps=%d %s wall=%.0f s" % (phase, O.time, O.iter, travel, now - wall_start))
+
+
+log("start: %d spheres d = %.1f um, gap %.1f um, v = %.2f mm/s, f = %.3f, dt = %.3e s (%.3f of Rayleigh %.3e s)"
+    % (P["n_particles"], d * 1e6, h * 1e6, P["blade_speed"] * 1e3, P["friction"], O.dt, O.dt / dt_crit, dt_crit))
+O.run()
+O.wait()
+
+on_floor = [b for b in spheres() if x_lo <= b.state.pos[0] <= x_hi]
+escaped = sum(1 for b in on_floor  # through a side wall or the floor, or thrown far upwards
+              if not (-R <= b.state.pos[1] <= W + R and -R <= b.state.pos[2] <= z_hi))
+state["rolled_off"] += len(sphere_ids) - len(on_floor)  # beyond the ends of the floor, falling
+raw = {
+    "format": "spreadmap-raw-1",
+    "status": state["status"],
+    "reason": state["reason"],
+    "params": P,
+    "yade_version": yade.config.version,
+    "n_particles": int(P["n_particles"]),
+    "time_step": O.dt,
+    "critical_time_step": dt_crit,
+    "time_step_ratio": O.dt / dt_crit,
+    "steps": O.iter,
+    "simulated_time": O.time,
+    "wall_time": time.time() - wall_start,
+    "phase_times": state["phase_times"],
+    "settled_top": state.get("settled_top"),
+    "settled_by_time": state.get("settled_by_time"),
+    "relaxed_by_time": state.get("relaxed_by_time"),
+    "move_start": state["move_start"],
+    "window": {"x_start": x_window_start, "x_end": x_window_end},
+    "peak_overlap_ratio": state["peak_overlap_ratio"],
+    "max_speed_seen": max(state["max_speed_seen"], max_speed()),
+    "final_kinetic_energy": utils.kineticEnergy(),
+    "kinetic_energy_scale": ke_scale,
+    "escaped_particles": escaped,
+    "rolled_off_particles": state["rolled_off"],
+    "max_speed_by_phase": state["max_speed_by_phase"],
+    "behind_series": state["behind_series"],
+    "snapshots": state["snapshots"],
+}
+write_atomically(out_path, raw)
+log("done: status %s %s; %d steps, %.4g s simulated, %.1f s wall; raw result in %s"
+    % (state["status"], state["reason"], O.iter, O.time, raw["wall_time"], out_path))
+sys.exit(EXIT_OK if state["status"] == "ok" else EXIT_BLOWN)
