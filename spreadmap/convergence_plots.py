@@ -1,0 +1,228 @@
+"""Figures of the convergence analysis and of the sampling study.
+
+Every figure is written as PNG and PDF with the numbers behind it as CSV beside it
+(``save_figure``).  Figures are built on ``matplotlib.figure.Figure`` objects rendered by the Agg
+canvas: no pyplot, no global state, safe in parallel workflow jobs.  Functions take DataFrames and
+an output path stem (``results/convergence/statistics`` -> ``statistics.png``, ``.pdf``,
+``.csv``) and return the paths written.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
+
+from . import convergence as cv
+from .figures import save_figure
+
+TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
+STAT_LABELS = {
+    "mean": "mean [-]",
+    "std": "standard deviation (ddof=1) [-]",
+    "median": "median [-]",
+    "kurtosis": "excess kurtosis (Fisher) [-]",
+    "skewness": "skewness [-]",
+}
+N_LABEL = "number of cases N [-]"
+
+
+def _new_figure(width: float, height: float) -> Figure:
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _label(target: str) -> str:
+    return TARGET_LABELS.get(target, f"{target} [-]")
+
+
+# ----------------------------------------------------------------------------------------------
+# (1) distributions per partition
+# ----------------------------------------------------------------------------------------------
+def partition_values(table: pd.DataFrame, sweep: str, targets: Sequence[str] = cv.DEFAULT_TARGETS,
+                     partitions: Iterable[int] | None = None, order_col: str = "index",
+                     partition_col: str | None = None) -> pd.DataFrame:
+    """Long frame (sweep, partition, target, value) of the usable target values per partition.
+
+    Partitions as in ``convergence.convergence_table``: prefixes of ``order_col`` order
+    (``partitions`` = their sizes) or, with ``partition_col``, one group per value (lattices),
+    labelled by the group size.
+    """
+    parts: list[tuple[int, pd.DataFrame]] = []
+    if partition_col is not None:
+        for _, g in table.groupby(partition_col, sort=False):
+            parts.append((len(g), g.loc[cv._usable(g)]))
+        parts.sort(key=lambda p: p[0])
+    else:
+        ordered = table.sort_values(order_col, kind="stable")
+        keep = cv._usable(ordered)
+        if partitions is None:
+            partitions = sorted({int(n) for n in np.unique(np.geomspace(
+                min(16, len(ordered)), len(ordered), 5).astype(int))})
+        parts = [(int(n), ordered.iloc[:int(n)][keep[:int(n)]]) for n in partitions]
+    frames = []
+    for n, g in parts:
+        for t in targets:
+            v = g[t].to_numpy(dtype=float)
+            v = v[np.isfinite(v)]
+            frames.append(pd.DataFrame({"sweep": sweep, "partition": n, "target": t, "value": v}))
+    return pd.concat(frames, ignore_index=True)
+
+
+def plot_distributions(long_df: pd.DataFrame, path_stem,
+                       targets: Sequence[str] = cv.DEFAULT_TARGETS) -> dict[str, Path]:
+    """Box plots of each target per partition, one column per sweep (e.g. LDS | lattice).
+
+    ``long_df``: columns sweep, partition, target, value (``partition_values`` of each sweep,
+    concatenated).  Boxes: quartiles, whiskers 1.5 IQR, the mean as a triangle.  Rows share
+    the y axis so the sweeps compare directly.
+    """
+    sweeps = list(dict.fromkeys(long_df["sweep"]))
+    fig = _new_figure(4.2 * len(sweeps), 3.0 * len(targets))
+    axes = fig.subplots(len(targets), len(sweeps), squeeze=False, sharey="row")
+    for i, t in enumerate(targets):
+        for j, s in enumerate(sweeps):
+            ax = axes[i, j]
+            sub = long_df[(long_df["sweep"] == s) & (long_df["target"] == t)]
+            ns = sorted(sub["partition"].unique())
+            data = [sub.loc[sub["partition"] == n, "value"].to_numpy() for n in ns]
+            if data:
+                ax.boxplot(data, tick_labels=[str(n) for n in ns], showmeans=True)
+            ax.set_title(f"{s}: {t.upper()} per partition")
+            ax.set_xlabel(N_LABEL)
+            ax.set_ylabel(_label(t))
+            ax.tick_params(axis="x", labelrotation=45)
+    return save_figure(fig, path_stem, long_df)
+
+
+# ----------------------------------------------------------------------------------------------
+# (2) statistics against N
+# ----------------------------------------------------------------------------------------------
+def _stats_long(name: str, df: pd.DataFrame, targets, tolerance, floors) -> pd.DataFrame:
+    fl = cv._floors(floors)
+    n = df["partition"].to_numpy() if "partition" in df.columns else df.index.to_numpy()
+    frames = []
+    for t in targets:
+        for s in cv.STATISTICS:
+            col = f"{t}_{s}"
+            if col not in df.columns:
+                continue
+            v = df[col].to_numpy(dtype=float)
+            final = v[np.isfinite(v)][-1] if np.isfinite(v).any() else np.nan
+            half = tolerance * max(abs(final), fl[s]) if np.isfinite(final) else np.nan
+            frames.append(pd.DataFrame({"sweep": name, "n": n, "target": t, "statistic": s,
+                                        "value": v, "final": final, "band_low": final - half,
+                                        "band_high": final + half}))
+    return pd.concat(frames, ignore_index=True)
+
+
+def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
+                    targets: Sequence[str] = cv.DEFAULT_TARGETS,
+                    tolerance: float = cv.DEFAULT_TOLERANCE,
+                    floors: Mapping[str, float] | None = None) -> dict[str, Path]:
+    """Each statistic against N (log x) for every sweep, with the tolerance band of each sweep.
+
+    ``sweeps``: name -> statistics frame, either a ``convergence_table`` (column ``partition``)
+    or a ``running_statistics`` frame (index ``n``).  The band is final value
+    +- tolerance * max(|final|, floor): the set of values within the criterion's reach of where
+    the sweep ended (the floor rule of ``convergence`` applies to skewness and kurtosis).
+    """
+    long_df = pd.concat([_stats_long(k, v, targets, tolerance, floors) for k, v in sweeps.items()],
+                        ignore_index=True)
+    fig = _new_figure(4.5 * len(targets), 2.4 * len(cv.STATISTICS))
+    axes = fig.subplots(len(cv.STATISTICS), len(targets), squeeze=False, sharex=True)
+    colors = {name: f"C{i}" for i, name in enumerate(sweeps)}
+    for j, t in enumerate(targets):
+        for i, s in enumerate(cv.STATISTICS):
+            ax = axes[i, j]
+            for name in sweeps:
+                sub = long_df[(long_df["sweep"] == name) & (long_df["target"] == t)
+                              & (long_df["statistic"] == s)]
+                if sub.empty:
+                    continue
+                c = colors[name]
+                marker = "o" if len(sub) <= 60 else None
+                ax.plot(sub["n"], sub["value"], color=c, marker=marker, ms=3, lw=1, label=name)
+                ax.axhspan(sub["band_low"].iloc[0], sub["band_high"].iloc[0], color=c, alpha=0.15,
+                           label=f"{name} final +- {tolerance:.2%} band")
+            ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())
+            ax.set_ylabel(f"{t.upper()} {STAT_LABELS[s]}")
+            if i == len(cv.STATISTICS) - 1:
+                ax.set_xlabel(N_LABEL)
+            if i == 0:
+                ax.set_title(f"{t.upper()} statistics against N")
+                ax.legend(fontsize="x-small")
+    return save_figure(fig, path_stem, long_df)
+
+
+# ----------------------------------------------------------------------------------------------
+# (3) the sampling study
+# ----------------------------------------------------------------------------------------------
+def plot_sampling_study(table: pd.DataFrame, path_stem,
+                        summary: pd.DataFrame | None = None) -> dict[str, Path]:
+    """Cases needed per design, per function: each seed as a dot, median with IQR bars.
+
+    ``table``: ``sampling_study.run_study`` output; ``summary`` defaults to
+    ``sampling_study.summarise(table)``.  Runs that did not converge within the budget are drawn
+    at the budget as open upward triangles (censored).  The CSV holds the tidy table joined with
+    the summary columns (median, q25, q75, iqr, not_converged) of its group.
+    """
+    from .sampling_study import summarise  # local: keeps the plot module import-light
+
+    summ = summarise(table) if summary is None else summary
+    keys = ["function", "method", "schedule"]
+    present = set(summ[["method", "schedule"]].itertuples(index=False, name=None))
+    order = [("lattice", "lattice_sizes"), ("lds", "lattice_sizes"), ("random", "lattice_sizes"),
+             ("lds", "case"), ("random", "case")]
+    groups = [g for g in order if g in present] + sorted(present - set(order))
+    method_color = {"lds": "C0", "random": "C1", "lattice": "C2"}
+    functions = list(dict.fromkeys(summ["function"]))
+    fig = _new_figure(max(6.0, 2.4 * len(functions)), 4.8)
+    ax = fig.subplots()
+    width = 0.8 / max(len(groups), 1)
+    for gi, (method, sched) in enumerate(groups):
+        c = method_color.get(method, f"C{3 + gi}")
+        filled = sched == "lattice_sizes"
+        label = f"{method}, checked at {'k^4 cases' if filled else 'every case'}"
+        for fi, fn in enumerate(functions):
+            x = fi - 0.4 + width * (gi + 0.5)
+            sel = table[(table["function"] == fn) & (table["method"] == method)
+                        & (table["schedule"] == sched)]
+            if sel.empty:
+                continue
+            v = sel["n_converged"].to_numpy(dtype=float)
+            budget = sel["budget"].to_numpy(dtype=float)
+            jitter = np.linspace(-0.3, 0.3, v.size) * width if v.size > 1 else np.zeros(1)
+            ok = np.isfinite(v)
+            ax.scatter(x + jitter[ok], v[ok], s=10, color=c, alpha=0.5)
+            ax.scatter(x + jitter[~ok], budget[~ok], s=24, marker="^", facecolors="none",
+                       edgecolors=c)
+            row = summ[(summ["function"] == fn) & (summ["method"] == method)
+                       & (summ["schedule"] == sched)].iloc[0]
+            kw = dict(color=c, mfc=c if filled else "white", mec=c, ms=7, capsize=3)
+            if np.isfinite(row["median"]):
+                lo = row["median"] - row["q25"]
+                hi = (row["q75"] - row["median"]) if np.isfinite(row["q75"]) else 0.0
+                ax.errorbar([x], [row["median"]], yerr=[[lo], [hi]], fmt="s" if filled else "o",
+                            label=label if fi == 0 else None, **kw)
+            elif fi == 0:
+                ax.plot([], [], "s" if filled else "o", label=label, color=c,
+                        mfc=kw["mfc"], mec=c)
+    for b in np.unique(table["budget"].to_numpy(dtype=float)):
+        ax.axhline(b, color="0.5", ls="--", lw=0.8)
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(functions)), functions)
+    ax.set_xlabel("test function")
+    ax.set_ylabel("cases needed to converge N [-]")
+    ax.set_title("cases until the criterion holds for good: seeds (dots), median and IQR; "
+                 "^ = not converged within the budget (dashed)", fontsize="small")
+    ax.legend(fontsize="x-small", ncol=2)
+    data = table.merge(summ[keys + ["median", "q25", "q75", "iqr", "not_converged"]], on=keys,
+                       how="left")
+    return save_figure(fig, path_stem, data)
