@@ -1,0 +1,102 @@
+"""Stability at the corners of the design space, the in-run watchdog, the outer timeout and the
+refusal of an unsafe step, on the real YADE binary (smoke preset)."""
+import json
+import math
+import time
+
+import pytest
+
+from spreadmap import config as spreadmap_config
+from spreadmap.metrics import case_metrics
+from spreadmap.scene import DENSEST_PACKING, UnsafeTimeStep, rayleigh_time_step, scene_parameters
+
+from conftest import case_params, run_many, run_scene, with_preset
+
+pytestmark = pytest.mark.yade
+
+CORNERS = {
+    # smallest particles with the largest gap, and largest particles with the smallest gap,
+    # each at the lowest and highest speed and friction
+    "small_d_wide_gap_fast_slippery": {"f": 0.15, "d_um": 10.0, "h_um": 75.0, "v_mm_s": 15.0},
+    "small_d_wide_gap_slow_rough": {"f": 0.45, "d_um": 10.0, "h_um": 75.0, "v_mm_s": 5.0},
+    "large_d_narrow_gap_slow_slippery": {"f": 0.15, "d_um": 50.0, "h_um": 55.0, "v_mm_s": 5.0},
+    "large_d_narrow_gap_fast_rough": {"f": 0.45, "d_um": 50.0, "h_um": 55.0, "v_mm_s": 15.0},
+}
+
+
+@pytest.fixture(scope="module")
+def corner_runs(config, tmp_path_factory):
+    jobs = []
+    for name, point in CORNERS.items():
+        jobs.append((case_params(config, point, "smoke"), tmp_path_factory.mktemp(name)))
+    results = run_many(jobs)
+    return {name: (params, result, raw) for name, (params, _), (result, raw) in zip(CORNERS, jobs, results)}
+
+
+@pytest.mark.parametrize("name", list(CORNERS))
+def test_corner_case_is_stable(corner_runs, config, name):
+    params, result, raw = corner_runs[name]
+    assert result["outcome"] == "ok", (result, raw.get("reason"))
+    m = case_metrics(raw, config["regime"], config["stability"])
+    print(name, {k: m[k] for k in ("mfr", "pd", "regime", "n_particles", "steps", "wall_time",
+                                   "peak_overlap_ratio", "max_speed", "final_ke_per_mgd", "rolled_off_particles")})
+    assert m["time_step_ratio"] == pytest.approx(config["presets"]["smoke"]["dt_factor"])
+    assert m["escaped_particles"] == 0  # nothing through a wall or the floor
+    assert m["peak_overlap_ratio"] < 0.02  # overlaps stay small (rigid-particle limit)
+    assert m["max_speed"] < 0.5  # a blow-up reaches hundreds of m/s; gravity and blade give < 0.3
+    assert m["final_ke_per_mgd"] < 5.0  # final kinetic energy below lifting every sphere 5 diameters
+    assert 0.0 <= m["mfr"] <= DENSEST_PACKING
+    assert 0.0 <= m["pd"] <= DENSEST_PACKING
+    assert not m["flagged"], m["flag_reason"]
+
+
+def test_watchdog_stops_a_run_within_seconds(config, tmp_path):
+    """With a speed bound below what falling spheres reach, the in-run watchdog must stop the run,
+    write a raw record with status 'blown', and exit 3, long before the outer timeout."""
+    params = case_params(config, {"f": 0.3, "d_um": 40.0, "h_um": 60.0, "v_mm_s": 10.0}, "smoke",
+                         max_speed=0.01, timeout_s=120.0)
+    start = time.time()
+    result, raw = run_scene(params, tmp_path)
+    assert result["outcome"] == "blown" and result["exit_code"] == 3
+    assert time.time() - start < 30
+    assert raw["status"] == "blown" and "max_speed" in raw["reason"]
+    m = case_metrics(raw, config["regime"], config["stability"])
+    assert m["flagged"] and math.isnan(m["mfr"]) and m["regime"] == ""
+
+
+def test_outer_timeout_kills_the_run(config, tmp_path):
+    params = case_params(config, {"f": 0.3, "d_um": 20.0, "h_um": 60.0, "v_mm_s": 5.0}, "smoke", timeout_s=4.0)
+    start = time.time()
+    result, raw = run_scene(params, tmp_path)
+    assert result["outcome"] == "timeout" and "timed out" in result["reason"]
+    assert time.time() - start < 15
+    assert raw == {}  # no raw result: the launcher's failure record is written by the workflow
+
+
+def test_yade_script_refuses_a_step_above_critical(config, tmp_path):
+    """Defence in depth: a hand-edited script with an unsafe step is refused by YADE itself."""
+    params = case_params(config, {"f": 0.3, "d_um": 10.0, "h_um": 60.0, "v_mm_s": 10.0}, "smoke")
+    params["time_step"] = 2.0 * params["critical_time_step"]
+    result, raw = run_scene(params, tmp_path)
+    assert result["outcome"] == "refused" and result["exit_code"] == 2
+    assert not (tmp_path / "raw.json").exists()
+    assert "REFUSED" in (tmp_path / "run.log").read_text()
+
+
+def test_unsafe_forced_step_refused_before_anything_runs(config):
+    cfg = with_preset(config, "forced", time_step_s=1e-6, density_scale=1)
+    with pytest.raises(UnsafeTimeStep, match=r"presets\.forced\.time_step_s.*above the Rayleigh critical step"):
+        scene_parameters({"f": 0.3, "d_um": 10.0, "h_um": 60.0, "v_mm_s": 10.0}, "forced", cfg, "x")
+    # a forced step below the critical one is used as given and recorded with its ratio
+    safe = 0.5 * rayleigh_time_step(5e-6, 7980.0, 2.1e9, 0.3)
+    cfg = with_preset(config, "forced", time_step_s=safe, density_scale=1)
+    p = scene_parameters({"f": 0.3, "d_um": 10.0, "h_um": 60.0, "v_mm_s": 10.0}, "forced", cfg, "x")
+    assert p["time_step"] == safe and p["time_step"] / p["critical_time_step"] == pytest.approx(0.5)
+
+
+def test_rayleigh_step_matches_spec_numbers():
+    """SPEC.md: ~5.3e-8 s at d = 10 um and ~2.7e-7 s at d = 50 um with the physical constants."""
+    assert rayleigh_time_step(5e-6, 7980.0, 2.1e9, 0.3) == pytest.approx(5.33e-8, rel=0.01)
+    assert rayleigh_time_step(25e-6, 7980.0, 2.1e9, 0.3) == pytest.approx(2.67e-7, rel=0.01)
+    # density x100 -> a 10x larger step
+    assert rayleigh_time_step(5e-6, 798000.0, 2.1e9, 0.3) == pytest.approx(5.33e-7, rel=0.01)
