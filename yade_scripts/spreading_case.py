@@ -211,8 +211,9 @@ def watchdog():
 
 
 def snapshot():
+    """All spheres (positions, radii, velocities) and the blade at this moment."""
     pos = [list(b.state.pos) for b in spheres()]
-    return {"time": O.time, "iter": O.iter,
+    return {"time": O.time, "iter": O.iter, "velocities": [list(b.state.vel) for b in spheres()],
             "blade_rear_x": blade_rear_x() if state["blade"] is not None else None,
             "removed_behind_volume": state["removed_behind_volume"],
             "positions": pos, "radii": [b.shape.radius for b in spheres()]}
@@ -282,12 +283,15 @@ def control():
             O.bodies[state["blade"]].state.vel = (P["blade_speed"], 0, 0)
             state["move_start"] = O.time
             start_phase("move")
+            state["snapshots"]["blade_start"] = snapshot()
     elif phase == "move":
         x = blade_rear_x()
         if "window_start" not in state["snapshots"] and x >= x_window_start:
             state["snapshots"]["window_start"] = snapshot()
             log("measurement window opens at t = %.4g s" % O.time)
-        elif "window_start" in state["snapshots"] and x >= x_window_end:
+        elif "window_middle" not in state["snapshots"] and x >= 0.5 * (x_window_start + x_window_end):
+            state["snapshots"]["window_middle"] = snapshot()
+        elif "window_middle" in state["snapshots"] and x >= x_window_end:
             state["snapshots"]["window_end"] = snapshot()
             monitor()
             finish("ok")
@@ -327,6 +331,8 @@ raw = {
     "relaxed_by_time": state.get("relaxed_by_time"),
     "move_start": state["move_start"],
     "window": {"x_start": x_window_start, "x_end": x_window_end},
+    "geometry": {"width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
+                 "floor_x": [x_lo, x_hi], "pile_length": L},
     "peak_overlap_ratio": state["peak_overlap_ratio"],
     "max_speed_seen": max(state["max_speed_seen"], max_speed()),
     "final_kinetic_energy": utils.kineticEnergy(),
