@@ -1,0 +1,15 @@
+"""Snakemake entry: write a sweep's sample table (the same points the workflow registered)."""
+import pandas as pd
+
+from spreadmap.sampling import halton, lattice
+from spreadmap.table import write_table
+from spreadmap.logs import log_to
+
+log_to(snakemake)  # noqa: F821
+
+sm = snakemake  # noqa: F821
+if "seed" in sm.params.keys():
+    table = halton(sm.params.n, sm.params.seed, sm.params.ranges)
+else:
+    table = pd.concat([lattice(k, sm.params.ranges).assign(k=k) for k in sorted(set(sm.params.k))], ignore_index=True)
+write_table(table, sm.output.samples)
