@@ -1,8 +1,14 @@
 # Parse-time set-up: validate the configuration and register every case the targets can ask for.
 # Per-case values reach the jobs as params from this registry (never through a shared table file,
-# which would re-run every case whenever the table grows).
+# which would re-run every case whenever the table grows). A case is its content (design point,
+# preset, packing seed): the same content asked for by two sets is one case, run once.
+import json
+
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import CASE_ID_PATTERN, case_id, rounded
+from spreadmap.design import NAMES
+from spreadmap.sampling import chosen_points, halton, lattice
+from spreadmap.render import template_sha256
 from spreadmap.scene import UnsafeTimeStep, scene_parameters
 
 try:
@@ -12,30 +18,87 @@ except spreadmap_config.ConfigError as error:
 
 RETRIES = 1  # a case that produced nothing (crash, timeout) is tried once more, then recorded as failed
 CASES = {}  # case id -> scene parameters of the YADE script
-SETS = {}  # set name (sweep, "cases", ...) -> list of (case id, label)
+SETS = {}  # set name ("lds", "lattice", "points") -> list of (case id, label)
+RANGES = config.get("ranges")
+SCENE_SHA256 = template_sha256()
+SWEEPS = config.get("sweeps") or {}
 
 
-def register(set_name, point, preset=None, seed=None, **label):
-    """Add a design point to a set of cases; the same content is one case whatever the set."""
+def add_case(point, preset=None, seed=None):
+    """The case id of a design point at a preset and packing seed; its scene is derived once."""
     preset = preset or config["preset"]
     seed = config["scene"]["seed"] if seed is None else seed
     cid = case_id(point, preset, seed)
     if cid not in CASES:
         try:
-            CASES[cid] = scene_parameters(rounded(point), preset, config, cid, seed)
+            CASES[cid] = {**scene_parameters(rounded(point), preset, config, cid, seed), "scene_sha256": SCENE_SHA256}
         except (UnsafeTimeStep, ValueError) as error:
             raise WorkflowError(f"spreadmap: case refused before anything ran: {error}") from None
-    SETS.setdefault(set_name, []).append((cid, {"sweep": set_name, "index": len(SETS.get(set_name, [])), **label}))
     return cid
 
 
-for _i, (_name, _case) in enumerate((config.get("cases") or {}).items()):
-    register("cases", _case, preset=_case.get("preset"), name=_name)
+def register(set_name, point, label, preset=None, seed=None):
+    """Add a design point to a set of cases (a set has a results table)."""
+    SETS.setdefault(set_name, []).append((add_case(point, preset, seed), {"sweep": set_name, **label}))
+
+
+def lds_size():
+    return max(SWEEPS["lds"]["partitions"])
+
+
+def lds_case_ids(n):
+    """Case ids of the first n points of the LDS sequence (for `snakemake converge`)."""
+    if n > len(LDS_SEQUENCE):
+        raise WorkflowError(f"spreadmap: {n} LDS cases asked for, beyond converge.budget = {len(LDS_SEQUENCE)}")
+    return LDS_SEQUENCE[:n]
+
+
+LDS_SEQUENCE = []  # case ids of the LDS sequence up to the larger of the sweep and the converge budget
+if "lds" in SWEEPS:
+    _n = max(lds_size(), (config.get("converge") or {}).get("budget", 0))
+    for _row in halton(_n, SWEEPS["lds"]["seed"], RANGES).to_dict("records"):
+        LDS_SEQUENCE.append(add_case(_row, preset=SWEEPS["lds"].get("preset")))
+        if _row["index"] < lds_size():
+            register("lds", _row, {"index": int(_row["index"])}, preset=SWEEPS["lds"].get("preset"))
+if "lattice" in SWEEPS:
+    _n = 0
+    for _k in sorted(set(SWEEPS["lattice"]["k"])):
+        for _row in lattice(_k, RANGES).to_dict("records"):
+            register("lattice", _row, {"index": _n, "k": _k, "index_in_lattice": int(_row["index"])},
+                     preset=SWEEPS["lattice"].get("preset"))
+            _n += 1
+try:
+    _points = chosen_points(config.get("points"), workflow.basedir)
+except ValueError as error:
+    raise WorkflowError(f"spreadmap: bad chosen points: {error}") from None
+for _i, _p in enumerate(_points):
+    register("points", _p["point"], {"index": _i, "name": _p["name"]},
+             preset=_p["preset"] or (config.get("points") or {}).get("preset"), seed=_p["seed"])
+
+
+GROW = config.get("converge", {})
+CONV = config.get("convergence", {})
+
+
+def final_converge_step(wildcards):
+    """Follow the converge checkpoints from the first batch to the step that stopped."""
+    n = GROW.get("start", 32)
+    while True:
+        with open(checkpoints.converge_step.get(n=n).output.step) as fh:
+            step = json.load(fh)
+        if step["stop"]:
+            return f"results/converge/step_{n}.json"
+        n = step["next_n"]
 
 
 def case_files(set_name, filename):
     return [f"results/cases/{cid}/{filename}" for cid, _ in SETS.get(set_name, [])]
 
 
+def set_tables():
+    return [f"results/tables/{name}.csv" for name in SETS]
+
+
 wildcard_constraints:
     case=CASE_ID_PATTERN,
+    set="[a-z][a-z0-9_]*",

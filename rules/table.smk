@@ -9,8 +9,6 @@ rule results_table:
         labels=lambda wc: [label for _, label in SETS.get(wc.set, [])],
     log:
         "logs/table/{set}.log",
-    wildcard_constraints:
-        set="[a-z][a-z0-9_]*",
     localrule: True
     conda:
         "../envs/analysis.yaml"

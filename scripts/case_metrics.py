@@ -3,6 +3,9 @@ import json
 
 from spreadmap.launcher import write_json_atomically
 from spreadmap.metrics import case_metrics
+from spreadmap.logs import log_to
+
+log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 with open(sm.input.raw) as fh:

@@ -3,14 +3,15 @@
 A run that ends with a raw result (ok, or blown up and stopped by the watchdog: deterministic, so
 not worth retrying) succeeds. A run that produced nothing (crash, timeout) fails so that
 Snakemake retries it; on the last attempt a failure record with the log's tail is written
-instead, so the case shows up in the table with its reason and never blocks the others."""
+instead, so the case shows up in the table with its reason and never blocks the others.
+A finished simulation of the same parameters (simulated.json, beside the output) is re-used."""
 import sys
 
-from spreadmap.launcher import failure_record, run_case, write_json_atomically
+from spreadmap.launcher import failure_record, simulate, write_json_atomically
 
 sm = snakemake  # noqa: F821
 params = sm.params.scene
-result = run_case(sm.input.script, sm.output.raw, sm.log[0], params["timeout_s"])
+result = simulate(params, sm.input.script, sm.output.raw, sm.log[0])
 print(f"{params['case_id']}: {result['outcome']} after {result['wall_time']:.1f} s {result['reason']}")
 if result["outcome"] not in ("ok", "blown"):
     if sm.resources.attempt <= sm.params.retries:

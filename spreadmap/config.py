@@ -69,13 +69,30 @@ def _check_cross_keys(config: dict) -> None:
     if config["preset"] not in presets:
         raise ConfigError(f"config key 'preset': value {config['preset']!r} is not allowed; "
                           f"it must be one of the presets defined: {sorted(presets)}")
-    for name, case in (config.get("cases") or {}).items():
-        if "preset" in case and case["preset"] not in presets:
-            raise ConfigError(f"config key 'cases.{name}.preset': value {case['preset']!r} is not allowed; "
-                              f"it must be one of {sorted(presets)}")
+    preset_keys = [("points.preset", (config.get("points") or {}).get("preset"))]
+    preset_keys += [(f"sweeps.{name}.preset", sweep.get("preset")) for name, sweep in (config.get("sweeps") or {}).items()]
+    preset_keys += [(f"points.named.{name}.preset", point.get("preset"))
+                    for name, point in ((config.get("points") or {}).get("named") or {}).items()]
+    for key, value in preset_keys:
+        if value is not None and value not in presets:
+            raise ConfigError(f"config key '{key}': value {value!r} is not allowed; "
+                              f"it must be one of the presets defined: {sorted(presets)}")
     for name, rng in (config.get("ranges") or {}).items():
         if not rng["min"] < rng["max"]:
             raise ConfigError(f"config key 'ranges.{name}': min {rng['min']} must be below max {rng['max']}")
+    named = set(((config.get("points") or {}).get("named") or {}))
+    for key in ("cases", "vtk"):
+        for name in (config.get("pictures") or {}).get(key, []):
+            if name not in named:
+                raise ConfigError(f"config key 'pictures.{key}': value {name!r} is not allowed; "
+                                  f"it must name a chosen point of points.named: {sorted(named)}")
+    if "surrogate" in config:
+        from .surrogate import make_config
+
+        try:
+            make_config(config["surrogate"])
+        except (ValueError, KeyError) as error:
+            raise ConfigError(f"config key 'surrogate': {error}") from None
     for name, preset in presets.items():
         if preset["window_d"] < config["scene"]["blade_thickness_d"]:
             raise ConfigError(f"config key 'presets.{name}.window_d': value {preset['window_d']} is not allowed; "

@@ -12,8 +12,18 @@ TEMPLATE = Path(__file__).resolve().parent.parent / "yade_scripts" / "spreading_
 _BLOCK = re.compile(r"(# --- case parameters.*?---\n)PARAMS = \{.*?\n\}\n(# --- end of case parameters ---)", re.S)
 
 
+def template_sha256(template: Path | str = TEMPLATE) -> str:
+    """Content hash of the scene template: part of every case's parameters, so that a change of
+    the scene re-renders and re-runs the cases (and invalidates finished simulations)."""
+    import hashlib
+
+    return hashlib.sha256(Path(template).read_bytes()).hexdigest()[:16]
+
+
 def render(params: dict, template: Path | str = TEMPLATE) -> str:
     text = Path(template).read_text()
+    if params.get("scene_sha256") not in (None, template_sha256(template)):
+        raise ValueError(f"case {params['case_id']} was derived for another version of {template}")
     if not _BLOCK.search(text):
         raise ValueError(f"{template}: no PARAMS block between the case-parameter markers")
     block = "PARAMS = " + pprint.pformat(params, sort_dicts=False, width=100) + "\n"

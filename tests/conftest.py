@@ -55,3 +55,70 @@ def with_preset(config: dict, name: str, **values) -> dict:
 
 def finite(x) -> bool:
     return isinstance(x, (int, float)) and math.isfinite(x)
+
+
+WORKFLOW_FILES = ["Snakefile", "config.yaml", "rules", "scripts", "yade_scripts", "schemas", "profiles", "envs"]
+SNAKEMAKE = str(ROOT / ".venv" / "bin" / "snakemake")
+
+
+def deep_update(base: dict, overrides: dict) -> dict:
+    for key, value in overrides.items():
+        if isinstance(value, dict) and isinstance(base.get(key), dict):
+            deep_update(base[key], value)
+        else:
+            base[key] = value
+    return base
+
+
+def make_workflow(tmp_path: Path, overrides: dict, drop: tuple = ()) -> Path:
+    """A copy of the workflow in tmp_path/wf whose config.yaml is the project's with `overrides`
+    merged in and the top-level keys in `drop` removed."""
+    import shutil
+
+    import yaml
+
+    wf = tmp_path / "wf"
+    wf.mkdir(exist_ok=True)
+    for name in WORKFLOW_FILES:
+        src = ROOT / name
+        if src.is_dir():
+            shutil.copytree(src, wf / name, dirs_exist_ok=True)
+        else:
+            shutil.copy(src, wf / name)
+    write_config(wf, overrides, drop)
+    return wf
+
+
+def write_config(wf: Path, overrides: dict, drop: tuple = ()) -> None:
+    import yaml
+
+    cfg = yaml.safe_load((ROOT / "config.yaml").read_text())
+    for key in drop:
+        cfg.pop(key, None)
+    (wf / "config.yaml").write_text(yaml.safe_dump(deep_update(cfg, copy.deepcopy(overrides)), sort_keys=False))
+
+
+def snakemake(wf: Path, *args, timeout: float = 600):
+    import subprocess
+
+    return subprocess.run([SNAKEMAKE, *args], cwd=wf, capture_output=True, text=True, timeout=timeout)
+
+
+def planned_jobs(dry_run_output: str) -> dict:
+    """Job counts from the 'Job stats' table of a dry run."""
+    counts, inside = {}, False
+    for line in dry_run_output.splitlines():
+        if line.startswith("Job stats"):
+            inside, counts = True, {}
+            continue
+        parts = line.split()
+        if inside and len(parts) == 2 and parts[1].isdigit():
+            counts[parts[0]] = int(parts[1])
+        elif inside and parts[:1] == ["total"]:
+            inside = False
+    return counts
+
+
+# Small, fast smoke sweeps for workflow tests: large particles only (a few seconds per case).
+FAST_SWEEP = {"preset": "smoke", "ranges": {"d_um": {"min": 35, "max": 50}, "h_um": {"min": 55, "max": 75}},
+              "points": {"named": {}}, "pictures": {"cases": [], "vtk": []}}

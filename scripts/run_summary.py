@@ -1,0 +1,18 @@
+"""Snakemake entry: the run summary (JSON and text) from the results tables."""
+import json
+from pathlib import Path
+
+import pandas as pd
+
+from spreadmap.summary import run_summary, summary_text
+from spreadmap.logs import log_to
+
+log_to(snakemake)  # noqa: F821
+
+sm = snakemake  # noqa: F821
+tables = {Path(p).stem: pd.read_csv(p) for p in sm.input.tables}
+summary = run_summary(tables)
+Path(sm.output.json).write_text(json.dumps(summary, indent=1))
+text = summary_text(summary)
+Path(sm.output.text).write_text(text)
+print(text)

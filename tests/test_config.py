@@ -1,0 +1,49 @@
+"""Bad configuration is refused with the key, the value and what is allowed; nothing is written."""
+import copy
+
+import pytest
+import yaml
+
+from spreadmap.config import ConfigError, validate
+
+from conftest import ROOT, make_workflow, snakemake
+
+
+@pytest.fixture()
+def raw_config():
+    return yaml.safe_load((ROOT / "config.yaml").read_text())
+
+
+@pytest.mark.parametrize("change,message", [
+    (lambda c: c["material"].update(poisson=0.6), r"'material\.poisson': value 0\.6 .* must be < 0\.5"),
+    (lambda c: c["presets"]["default"].update(width_d="five"), r"'presets\.default\.width_d': value 'five' .* of type number"),
+    (lambda c: c.update(preset="fast"), r"'preset': value 'fast' .* one of the presets defined: \['default', 'reference', 'smoke'\]"),
+    (lambda c: c.update(bogus=1), r"unknown config key\(s\) \['bogus'\] at the top level"),
+    (lambda c: c["sweeps"]["lds"].update(partitions=[8, 1]), r"'sweeps\.lds\.partitions\[1\]': value 1 .* must be >= 2"),
+    (lambda c: c["ranges"].update(d_um={"min": 50, "max": 10}), r"'ranges\.d_um': min 50 must be below max 10"),
+    (lambda c: c["points"]["named"]["normal"].update(preset="nope"), r"'points\.named\.normal\.preset': value 'nope'"),
+    (lambda c: c["presets"]["smoke"].pop("dt_factor"), r"'presets\.smoke': 'dt_factor' is a required property"),
+    (lambda c: c["presets"]["smoke"].update(dt_factor=1.5), r"'presets\.smoke\.dt_factor': value 1\.5 .* must be <= 1"),
+])
+def test_bad_values_are_refused_with_the_key_named(raw_config, change, message):
+    change(raw_config)
+    with pytest.raises(ConfigError, match=message):
+        validate(copy.deepcopy(raw_config))
+
+
+def test_the_shipped_config_is_valid_and_defaults_are_filled(raw_config):
+    cfg = validate(copy.deepcopy(raw_config))
+    assert cfg["scene"]["cloud_fraction"] == 0.25  # a default from the schema
+
+
+@pytest.mark.parametrize("overrides,message", [
+    ({"preset": "fast"}, "config key 'preset': value 'fast' is not allowed"),
+    ({"presets": {"default": {"time_step_s": 1e-6, "density_scale": 1}}},
+     "presets.default.time_step_s': value 1e-06 s is above the Rayleigh critical step"),
+])
+def test_workflow_refuses_bad_config_before_anything_runs(tmp_path, overrides, message):
+    wf = make_workflow(tmp_path, overrides)
+    result = snakemake(wf, "-n")
+    assert result.returncode != 0
+    assert message in result.stdout + result.stderr
+    assert not (wf / "results").exists()

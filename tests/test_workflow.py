@@ -1,0 +1,108 @@
+"""The sweep DAG on real Snakemake and YADE: growth re-uses finished cases, a failed case is
+recorded with its reason, a killed run resumes without redoing finished cases."""
+import copy
+import json
+import os
+import signal
+import subprocess
+import time
+
+import pandas as pd
+import pytest
+
+from conftest import FAST_SWEEP, SNAKEMAKE, deep_update, make_workflow, planned_jobs, snakemake, write_config
+
+pytestmark = pytest.mark.yade
+DROP = ("sweeps", "points")  # the tests give their own
+
+
+def lds_only(partitions, **extra):
+    cfg = copy.deepcopy(FAST_SWEEP)
+    cfg["sweeps"] = {"lds": {"seed": 42, "partitions": partitions}}
+    return deep_update(cfg, copy.deepcopy(extra))
+
+
+def raw_files(wf):
+    return {p.parent.name: p for p in (wf / "results" / "cases").glob("*/raw.json")}
+
+
+def test_growing_lds_from_4_to_8_runs_exactly_the_4_new_cases(tmp_path):
+    wf = make_workflow(tmp_path, lds_only([4]), DROP)
+    assert planned_jobs(snakemake(wf, "sweeps", "-n").stdout)["run_case"] == 4
+    run = snakemake(wf, "sweeps")
+    assert run.returncode == 0, run.stderr[-3000:]
+    before = {cid: (p.read_bytes(), p.stat().st_mtime_ns) for cid, p in raw_files(wf).items()}
+    assert len(before) == 4
+
+    write_config(wf, lds_only([4, 8]), DROP)
+    dry = snakemake(wf, "sweeps", "-n")
+    jobs = planned_jobs(dry.stdout)
+    print("dry run after growing 4 -> 8:", jobs)
+    assert jobs["run_case"] == 4 and jobs["render_case"] == 4
+    run = snakemake(wf, "sweeps")
+    assert run.returncode == 0, run.stderr[-3000:]
+    after = raw_files(wf)
+    assert len(after) == 8
+    for cid, (data, mtime) in before.items():  # the first four untouched, byte for byte
+        assert after[cid].read_bytes() == data and after[cid].stat().st_mtime_ns == mtime
+    table = pd.read_csv(wf / "results" / "tables" / "lds.csv")
+    assert list(table["index"]) == list(range(8)) and (table["status"] == "ok").all()
+    assert planned_jobs(snakemake(wf, "sweeps", "-n").stdout) == {}  # nothing left to do
+
+
+def test_a_failed_case_is_recorded_with_its_reason_and_the_others_finish(tmp_path):
+    """A chosen point at a preset with a 2 s outer timeout fails twice (first attempt + one retry),
+    is recorded as failed with the reason, and the sweep's cases finish."""
+    broken = {"presets": {"broken": {**FAST_SWEEP.get("presets", {}), "width_d": 3, "heap_height_d": 4,
+                                     "pile_length_min_d": 4, "heap_reserve": 1.2, "transient_d": 1, "window_d": 3,
+                                     "dt_factor": 0.35, "density_scale": 1000, "timeout_s": 2}},
+              "points": {"named": {"doomed": {"f": 0.3, "d_um": 20.0, "h_um": 60.0, "v_mm_s": 5.0, "preset": "broken"}}}}
+    wf = make_workflow(tmp_path, lds_only([3], **broken), DROP)
+    run = snakemake(wf, "sweeps")
+    assert run.returncode == 0, run.stderr[-3000:]  # the failure is recorded, not fatal
+    log = run.stdout + run.stderr
+    assert "will be retried" in log  # the first attempt failed and was retried once
+    points = pd.read_csv(wf / "results" / "tables" / "points.csv")
+    assert points.loc[0, "status"] == "failed" and "timed out after 2 s" in points.loc[0, "reason"]
+    assert bool(points.loc[0, "flagged"])
+    lds = pd.read_csv(wf / "results" / "tables" / "lds.csv")
+    assert len(lds) == 3 and (lds["status"] == "ok").all()
+    summary = json.loads((wf / "results" / "summary.json").read_text())
+    assert summary["sets"]["points"]["failed"] == 1 and summary["sets"]["lds"]["done"] == 3
+    assert "timed out" in summary["sets"]["points"]["problems"][0]["reason"]
+    text = (wf / "results" / "summary.txt").read_text()
+    assert "doomed" not in text or "timed out" in text
+    assert "broken-f0.3000-d20.000-h60.000-v5.0000-s1: failed: failed: timed out" in text
+
+
+def test_killed_run_resumes_without_redoing_finished_cases(tmp_path):
+    wf = make_workflow(tmp_path, lds_only([5]), DROP)
+    log = open(tmp_path / "killed-run.log", "w")
+    proc = subprocess.Popen([SNAKEMAKE, "sweeps", "--cores", "1"], cwd=wf, stdin=subprocess.DEVNULL, stdout=log,
+                            stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        deadline = time.time() + 300
+        while len(raw_files(wf)) < 2 and time.time() < deadline and proc.poll() is None:
+            time.sleep(0.2)
+        assert len(raw_files(wf)) >= 2, "no case finished in time:\n" + (tmp_path / "killed-run.log").read_text()[-3000:]
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # kill -9 snakemake and the YADE run it started
+        proc.wait()
+        log.close()
+    finished = {cid: p.read_bytes() for cid, p in raw_files(wf).items()}
+    assert 2 <= len(finished) < 5
+    dry = planned_jobs(snakemake(wf, "sweeps", "-n").stdout)
+    # Snakemake re-plans the unfinished cases, plus any whose YADE run had finished when the kill
+    # came but whose job Snakemake had not yet recorded as complete ...
+    assert 5 - len(finished) <= dry["run_case"] <= 5 - len(finished) + 1
+    # kill -9 leaves Snakemake's directory lock: the README's resume is --unlock, then run again
+    assert snakemake(wf, "--unlock").returncode == 0
+    run = snakemake(wf, "sweeps")
+    assert run.returncode == 0, (run.stdout + run.stderr)[-6000:]
+    after = raw_files(wf)
+    assert len(after) == 5
+    # ... but no finished case is simulated again: the raw records (which hold each run's wall
+    # time) are byte-identical, and the YADE runs of the resume are only the unfinished ones.
+    assert all(after[cid].read_bytes() == data for cid, data in finished.items())
+    logs = run.stdout + run.stderr
+    assert logs.count(": ok after") == 5 - len(finished)
