@@ -1,0 +1,26 @@
+MAPS = config.get("maps", {})
+MAP_FIGURES = ["machine_map", "powder_band_map", "powder_cluster_map", "parallel_coordinates",
+               "regime_overlay", "sensitivity_ranking"]
+
+
+rule maps:
+    """Processing design maps from the surrogate, the DEM sample in parallel coordinates, the
+    regime overlay, and the parameter ranking (band widths and Sobol indices)."""
+    input:
+        model="results/surrogate/model.joblib",
+        table="results/tables/lds.csv",
+    output:
+        **{name: report(f"results/maps/{name}.png", caption=f"captions/{name}.rst", category="Maps")
+           for name in MAP_FIGURES},
+        ranking="results/maps/sensitivity_ranking_table.csv",
+    params:
+        maps=MAPS,
+        regime=config["regime"],
+        ranges=RANGES,
+    log:
+        "logs/maps.log",
+    localrule: True
+    conda:
+        "../envs/analysis.yaml"
+    script:
+        "../scripts/maps.py"

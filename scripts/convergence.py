@@ -1,0 +1,42 @@
+"""Snakemake entry: convergence of the sweeps' statistics, summary JSON and figures."""
+import json
+from pathlib import Path
+
+import pandas as pd
+
+from spreadmap import convergence as cv
+from spreadmap import convergence_plots as plots
+from spreadmap.design import TARGETS
+from spreadmap.logs import log_to
+
+log_to(snakemake)  # noqa: F821
+
+sm = snakemake  # noqa: F821
+p = sm.params
+tables = {Path(t).stem: pd.read_csv(t) for t in sm.input.tables}
+out = Path(sm.output.summary).parent
+frames, verdicts, long = [], {}, []
+for name, table in tables.items():
+    partition_col = "k" if name == "lattice" else None
+    partitions = None if partition_col else sorted(p.partitions)
+    conv = cv.convergence_table(table, TARGETS, partitions=partitions, tolerance=p.tolerance, floors=p.floors,
+                                partition_col=partition_col)
+    frames.append(conv.assign(sweep=name))
+    verdicts[name] = conv
+    long.append(plots.partition_values(table, name, TARGETS, partitions=partitions, partition_col=partition_col))
+pd.concat(frames, ignore_index=True).to_csv(sm.output.partitions, index=False)
+
+usable = tables["lds"][(tables["lds"]["status"] == "ok") & ~tables["lds"]["flagged"].astype(bool)].sort_values("index")
+running = cv.running_statistics(usable[list(TARGETS)].to_numpy(), start=2, names=TARGETS)
+running.to_csv(sm.output.running, index=False)
+stable = cv.first_stable_n(running, tolerance=p.tolerance, window=p.window, floors=p.floors)
+summary = cv.summary(verdicts, tolerance=p.tolerance)
+summary["lds_case_by_case"] = stable
+summary["note"] = ("partitions: converged at the first N where all five statistics of MFR and PD change by less "
+                   "than the tolerance from the previous partition; case by case: see lds_case_by_case")
+Path(sm.output.summary).write_text(json.dumps(summary, indent=1, default=str))
+plots.plot_distributions(pd.concat(long, ignore_index=True), out / "distributions", TARGETS)
+sweeps_stats = {name: conv for name, conv in verdicts.items()}
+sweeps_stats["lds case by case"] = running
+plots.plot_statistics(sweeps_stats, out / "statistics", TARGETS, tolerance=p.tolerance, floors=p.floors)
+print(json.dumps(summary, indent=1, default=str))

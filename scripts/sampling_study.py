@@ -1,0 +1,18 @@
+"""Snakemake entry: the DEM-free sampling-design study (LDS vs lattice vs random)."""
+from spreadmap import sampling_study
+from spreadmap.convergence_plots import plot_sampling_study
+from spreadmap.surrogate import load_model
+from spreadmap.logs import log_to
+
+log_to(snakemake)  # noqa: F821
+
+sm = snakemake  # noqa: F821
+p = sm.params
+model = load_model(sm.input.model)
+result = sampling_study.study(predictor=model, ranges=p.ranges, seeds=p.study.get("seeds", 8),
+                              k_max=p.study.get("k_max", 10), tolerance=p.tolerance, floors=p.floors)
+result.table.to_csv(sm.output.table, index=False)
+result.summary.to_csv(sm.output.summary, index=False)
+plot_sampling_study(result.table, sm.output.figure[: -len(".png")], result.summary)
+print(result.summary.to_string())
+print(result.ratios.to_string())
