@@ -1,0 +1,85 @@
+"""The analysis half of the DAG on a small finished smoke run: convergence, surrogate, maps,
+case pictures, VTK, the HTML report, and the run-until-converged target."""
+import copy
+import json
+import re
+
+import pytest
+
+from conftest import FAST_SWEEP, deep_update, make_workflow, planned_jobs, snakemake, write_config
+
+pytestmark = pytest.mark.yade
+
+SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
+    "sweeps": {"lds": {"seed": 42, "partitions": [6, 12]}, "lattice": {"k": [2]}},
+    "ranges": {"d_um": {"min": 40, "max": 50}, "f": {"min": 0.3, "max": 0.45}},
+    "points": {"named": {"demo": {"f": 0.3, "d_um": 45.0, "h_um": 65.0, "v_mm_s": 10.0}}},
+    "pictures": {"cases": ["demo"], "vtk": ["demo"]},
+    "surrogate": {"neurons": [2, 4], "seeds": [0, 1, 2], "cv_folds": 3, "gp_restarts": 0, "ensemble_members": 2},
+    "convergence": {"sampling_study": {"seeds": 2, "k_max": 4}},
+    "maps": {"sobol_n": 128, "machine": {"n_h": 3, "n_v": 3}},
+    "converge": {"start": 4, "batch": 2, "k_consecutive": 3, "budget": 8},
+})
+REPORT_FIGURES = ["distributions", "statistics", "sampling_study", "surrogate_parity", "surrogate_r2_vs_neurons",
+                  "surrogate_learning_curve", "machine_map", "powder_band_map", "powder_cluster_map",
+                  "parallel_coordinates", "regime_overlay", "sensitivity_ranking", "demo"]
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    wf = make_workflow(tmp_path_factory.mktemp("analyses"), SMALL_RUN, drop=("sweeps", "points"))
+    run = snakemake(wf, timeout=900)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-5000:]
+    return wf
+
+
+def test_main_job_writes_every_analysis_output(finished_run):
+    wf = finished_run / "results"
+    for stem in ["convergence/distributions", "convergence/statistics", "convergence/sampling_study",
+                 "surrogate/surrogate_parity", "maps/machine_map", "maps/powder_band_map", "maps/powder_cluster_map",
+                 "maps/parallel_coordinates", "maps/regime_overlay", "maps/sensitivity_ranking", "pictures/demo"]:
+        for ext in ("png", "pdf", "csv"):
+            assert (wf / f"{stem}.{ext}").stat().st_size > 0, f"{stem}.{ext}"
+    summary = json.loads((wf / "convergence" / "summary.json").read_text())
+    assert {"lds", "lattice"} <= set(summary["sweeps"])
+    ranking = (wf / "maps" / "sensitivity_ranking_table.csv").read_text()
+    assert all(name in ranking for name in ("f", "d_um", "h_um", "v_mm_s"))
+    meta = json.loads((wf / "surrogate" / "model.json").read_text())
+    assert meta["training_sha256"] if "training_sha256" in meta else meta
+    predictions = (wf / "surrogate" / "predictions.csv").read_text()
+    assert "mfr_std" in predictions
+
+
+def test_vtk_written_when_asked(finished_run):
+    files = {f.stem: f for f in (finished_run / "results" / "vtk" / "demo").glob("*.vtk")}
+    assert set(files) == {"blade_start", "window_start", "window_middle", "window_end"}
+    head = files["window_end"].read_text().splitlines()[:5]
+    assert head[0].startswith("# vtk DataFile") and "POLYDATA" in head[3]
+
+
+def test_report_contains_every_figure(finished_run):
+    run = snakemake(finished_run, "--report", "report.html", timeout=600)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    html = (finished_run / "report.html").read_text(errors="replace")
+    for name in REPORT_FIGURES:
+        assert re.search(rf"{name}\.png", html), f"{name}.png missing from the report"
+
+
+def test_converge_stops_at_the_budget_when_the_criterion_never_holds(finished_run):
+    run = snakemake(finished_run, "converge", timeout=600)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    stopped = json.loads((finished_run / "results" / "converge" / "stopped.json").read_text())
+    assert stopped["reason"] == "budget" and stopped["n"] == 8  # 0.5 % is out of reach of 8 cases
+
+
+def test_converge_stops_early_when_the_criterion_holds_at_once(finished_run):
+    cfg = deep_update(copy.deepcopy(SMALL_RUN), {"convergence": {"tolerance": 100.0}, "converge": {"budget": 12},
+                                                 "sweeps": {"lds": {"partitions": [6, 12]}}})
+    write_config(finished_run, cfg, drop=("sweeps", "points"))
+    (finished_run / "results" / "converge").exists() and [p.unlink() for p in (finished_run / "results" / "converge").glob("*.json")]
+    dry = snakemake(finished_run, "converge", "-n")
+    assert "converge_step" in planned_jobs(dry.stdout)  # the dry run shows the first step
+    run = snakemake(finished_run, "converge", timeout=600)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    stopped = json.loads((finished_run / "results" / "converge" / "stopped.json").read_text())
+    assert stopped["reason"] == "converged" and stopped["n"] < 12
