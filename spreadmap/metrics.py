@@ -78,6 +78,10 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict) -> dict:
         "escaped_particles": raw.get("escaped_particles", math.nan),
         "rolled_off_particles": raw.get("rolled_off_particles", math.nan),
         "max_speed": raw.get("max_speed_seen", math.nan),
+        # the settle / relax phases ended on their time cap, kinetic energy not yet decayed (the
+        # free rolling of spheres without rolling resistance keeps it up): reported, not flagged
+        "settled_by_time": raw.get("settled_by_time"),
+        "relaxed_by_time": raw.get("relaxed_by_time"),
         "yade_version": raw.get("yade_version", ""),
     }
     flags = []

@@ -79,6 +79,10 @@ out_path = sys.argv[1] if len(sys.argv) > 1 else os.path.splitext(os.path.abspat
 wall_start = time.time()
 
 
+POINT = "f=%.3f d=%.1fum h=%.1fum v=%.2fmm/s" % (P["friction"], P["diameter"] * 1e6, P["gap"] * 1e6,
+                                                  P["blade_speed"] * 1e3)
+
+
 def log(msg):
     print("[%s] %s" % (P["case_id"], msg))
     sys.stdout.flush()
@@ -298,9 +302,11 @@ def control():
     now = time.time()
     if now - state["last_progress"] >= P["progress_every_s"]:
         state["last_progress"] = now
-        travel = ("blade %.1f of %.1f d" % ((blade_rear_x() + tb) / d, (x_window_end + tb) / d)
+        travel = ("blade %.1f of %.1f d " % ((blade_rear_x() + tb) / d, (x_window_end + tb) / d)
                   if phase == "move" else "")
-        log("progress phase=%s t=%.4g s steps=%d %s wall=%.0f s" % (phase, O.time, O.iter, travel, now - wall_start))
+        total = " of ~%d" % P["estimated_steps"] if P.get("estimated_steps") else ""
+        log("progress %s phase=%s t=%.4g s steps=%d%s %swall=%.0f s"
+            % (POINT, phase, O.time, O.iter, total, travel, now - wall_start))
 
 
 log("start: %d spheres d = %.1f um, gap %.1f um, v = %.2f mm/s, f = %.3f, dt = %.3e s (%.3f of Rayleigh %.3e s)"
