@@ -1,7 +1,8 @@
 """Snakemake entry: write one case's YADE script (parameters embedded)."""
-from spreadmap.render import render, write_atomically
+from spreadmap.files import write_text_atomically
+from spreadmap.render import render
 from spreadmap.logs import log_to
 
 log_to(snakemake)  # noqa: F821
 
-write_atomically(snakemake.output.script, render(snakemake.params.scene))  # noqa: F821
+write_text_atomically(snakemake.output.script, render(snakemake.params.scene))  # noqa: F821

@@ -15,6 +15,8 @@ import sys
 import time
 from pathlib import Path
 
+from .files import atomic_path, write_text_atomically
+
 EXIT_CODES = {0: "ok", 2: "refused", 3: "blown", 4: "failed"}
 
 
@@ -90,9 +92,8 @@ def simulate(params: dict, script: Path | str, raw_out: Path | str, log_path: Pa
         result = run_case(script, simulated, log_path, params["timeout_s"])
         result["reused"] = False
     if result["outcome"] in ("ok", "blown"):
-        tmp = raw_out.with_name(f".{raw_out.name}.tmp{os.getpid()}")
-        shutil.copyfile(simulated, tmp)
-        os.replace(tmp, raw_out)
+        with atomic_path(raw_out) as tmp:
+            shutil.copyfile(simulated, tmp)
     return result
 
 
@@ -111,7 +112,4 @@ def failure_record(params: dict, result: dict, log_path: Path | str) -> dict:
 
 
 def write_json_atomically(path: Path | str, data: dict) -> None:
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    tmp.write_text(json.dumps(data, indent=1))
-    os.replace(tmp, path)
+    write_text_atomically(path, json.dumps(data, indent=1))

@@ -3,10 +3,10 @@ PARAMS block is replaced by the case's parameters, everything else is kept verba
 rendered file is readable and re-runnable by hand with `yade -n -x case.py`."""
 from __future__ import annotations
 
-import os
 import pprint
 import re
 from pathlib import Path
+
 
 TEMPLATE = Path(__file__).resolve().parent.parent / "yade_scripts" / "spreading_case.py"
 _BLOCK = re.compile(r"(# --- case parameters.*?---\n)PARAMS = \{.*?\n\}\n(# --- end of case parameters ---)", re.S)
@@ -29,11 +29,3 @@ def render(params: dict, template: Path | str = TEMPLATE) -> str:
     block = "PARAMS = " + pprint.pformat(params, sort_dicts=False, width=100) + "\n"
     header = f"# --- case parameters of {params['case_id']} (rendered by spreadmap) ---\n"
     return _BLOCK.sub(lambda m: header + block + m.group(2), text, count=1)
-
-
-def write_atomically(path: Path | str, text: str) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    tmp.write_text(text)
-    os.replace(tmp, path)

@@ -3,10 +3,11 @@ time and peak memory from Snakemake's benchmark), and the run summary built from
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import pandas as pd
+
+from .files import atomic_path
 
 FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
                  "mfr", "pd", "regime", "flagged", "flag_reason"]
@@ -37,8 +38,5 @@ def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFr
 
 
 def write_table(table: pd.DataFrame, path: Path | str) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    table.to_csv(tmp, index=False)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        table.to_csv(tmp, index=False)

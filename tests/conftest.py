@@ -13,7 +13,8 @@ import pytest
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import case_id, rounded
 from spreadmap.launcher import run_case
-from spreadmap.render import render, write_atomically
+from spreadmap.files import write_text_atomically
+from spreadmap.render import render
 from spreadmap.scene import scene_parameters
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -27,7 +28,7 @@ def config() -> dict:
 def run_scene(params: dict, workdir: Path) -> tuple[dict, dict]:
     """Render and run one case in workdir; returns (launcher result, raw record or {})."""
     script = workdir / "case.py"
-    write_atomically(script, render(params))
+    write_text_atomically(script, render(params))
     result = run_case(script, workdir / "raw.json", workdir / "run.log", params["timeout_s"])
     raw = json.loads((workdir / "raw.json").read_text()) if (workdir / "raw.json").exists() else {}
     return result, raw
