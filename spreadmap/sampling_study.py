@@ -66,10 +66,11 @@ from typing import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
-from scipy.stats import qmc
 
 from . import convergence as cv
 from .design import NAMES, to_physical
+from .sampling import halton_unit as lds_points  # the workflow's own LDS and lattice points
+from .sampling import lattice_unit as lattice_points
 
 D = len(NAMES)
 
@@ -144,20 +145,9 @@ def predictor_on_unit_cube(predict: Callable[[np.ndarray], np.ndarray],
 # ----------------------------------------------------------------------------------------------
 # designs
 # ----------------------------------------------------------------------------------------------
-def lds_points(n: int, seed: int) -> np.ndarray:
-    """The first n points of the scrambled Halton sequence of this seed (unit cube)."""
-    return qmc.Halton(d=D, scramble=True, seed=seed).random(n)
-
-
 def random_points(n: int, seed: int) -> np.ndarray:
     """n i.i.d. uniform points of the unit cube."""
     return np.random.default_rng(seed).random((n, D))
-
-
-def lattice_points(k: int) -> np.ndarray:
-    """k points per dimension including both end points: k^4 points of the unit cube."""
-    axis = np.linspace(0.0, 1.0, k)
-    return np.stack(np.meshgrid(*([axis] * D), indexing="ij"), axis=-1).reshape(-1, D)
 
 
 def _as_2d(y) -> np.ndarray:
