@@ -7,6 +7,7 @@ import pandas as pd
 from spreadmap import convergence as cv
 from spreadmap import convergence_plots as plots
 from spreadmap.design import TARGETS
+from spreadmap.table import usable
 from spreadmap.logs import log_to
 
 log_to(snakemake)  # noqa: F821
@@ -26,8 +27,8 @@ for name, table in tables.items():
     long.append(plots.partition_values(table, name, TARGETS, partitions=partitions, partition_col=partition_col))
 pd.concat(frames, ignore_index=True).to_csv(sm.output.partitions, index=False)
 
-usable = tables["lds"][(tables["lds"]["status"] == "ok") & ~tables["lds"]["flagged"].astype(bool)].sort_values("index")
-running = cv.running_statistics(usable[list(TARGETS)].to_numpy(), start=2, names=TARGETS)
+lds = tables["lds"][usable(tables["lds"])].sort_values("index")
+running = cv.running_statistics(lds[list(TARGETS)].to_numpy(), start=2, names=TARGETS)
 running.to_csv(sm.output.running, index=False)
 stable = cv.first_stable_n(running, tolerance=p.tolerance, window=p.window, floors=p.floors)
 summary = cv.summary(verdicts, tolerance=p.tolerance)

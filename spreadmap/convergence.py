@@ -66,6 +66,8 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
+
+from .table import usable as usable_rows
 from scipy import stats as _st
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")
@@ -148,15 +150,6 @@ def relative_changes(prev: Mapping[str, float], curr: Mapping[str, float],
     return out
 
 
-def _usable(table: pd.DataFrame) -> np.ndarray:
-    ok = np.ones(len(table), dtype=bool)
-    if "status" in table.columns:
-        ok &= (table["status"] == "ok").to_numpy()
-    if "flagged" in table.columns:
-        ok &= ~table["flagged"].fillna(False).astype(bool).to_numpy()
-    return ok
-
-
 def _stat_row(frames: Mapping[str, np.ndarray], prev_row: dict | None, fl: dict,
               tolerance: float) -> dict:
     row: dict[str, Any] = {}
@@ -206,7 +199,7 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
     if "sweep" in table.columns and table["sweep"].nunique() > 1:
         raise ValueError("table holds several sweeps; filter it to one sweep first")
     fl = _floors(floors)
-    usable = _usable(table)
+    usable = usable_rows(table)
     work = table.assign(_usable=usable)
     groups: list[tuple[int, Any, pd.DataFrame]] = []
     if partition_col is not None:

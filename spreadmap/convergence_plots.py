@@ -19,6 +19,7 @@ from matplotlib.ticker import NullFormatter
 
 from . import convergence as cv
 from .figures import save_figure
+from .table import usable
 
 TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
 STAT_LABELS = {
@@ -56,11 +57,11 @@ def partition_values(table: pd.DataFrame, sweep: str, targets: Sequence[str] = c
     parts: list[tuple[int, pd.DataFrame]] = []
     if partition_col is not None:
         for _, g in table.groupby(partition_col, sort=False):
-            parts.append((len(g), g.loc[cv._usable(g)]))
+            parts.append((len(g), g.loc[usable(g)]))
         parts.sort(key=lambda p: p[0])
     else:
         ordered = table.sort_values(order_col, kind="stable")
-        keep = cv._usable(ordered)
+        keep = usable(ordered)
         if partitions is None:
             partitions = sorted({int(n) for n in np.unique(np.geomspace(
                 min(16, len(ordered)), len(ordered), 5).astype(int))})

@@ -48,6 +48,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 
 from spreadmap.design import BY_NAME, NAMES, bounds  # noqa: E402
 from spreadmap.figures import save_figure  # noqa: E402
+from spreadmap.table import usable  # noqa: E402
 
 Predictor = Callable[[np.ndarray], np.ndarray]
 
@@ -235,11 +236,7 @@ def _which_labelled(n: int, max_labels: int) -> set[int]:
 
 def usable_cases(cases: pd.DataFrame) -> pd.DataFrame:
     """Cases fit for statistics: status ok, not flagged, finite MFR and PD (where present)."""
-    keep = np.ones(len(cases), bool)
-    if "status" in cases:
-        keep &= (cases["status"] == "ok").to_numpy()
-    if "flagged" in cases:
-        keep &= ~cases["flagged"].fillna(False).astype(bool).to_numpy()
+    keep = usable(cases)
     for t in ("mfr", "pd"):
         if t in cases:
             keep &= np.isfinite(cases[t].to_numpy(float))

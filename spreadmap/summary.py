@@ -6,6 +6,8 @@ import math
 
 import pandas as pd
 
+from .table import usable
+
 
 def _num(x) -> float | None:
     return None if x is None or (isinstance(x, float) and math.isnan(x)) else round(float(x), 3)
@@ -23,7 +25,7 @@ def set_summary(table: pd.DataFrame) -> dict:
         "failed": int(len(table) - status.get("ok", 0)),
         "status_counts": {k: int(v) for k, v in status.items()},
         "flagged": int(len(flagged)),
-        "usable": int(len(ok) - ok["flagged"].astype(bool).sum()) if len(ok) else 0,
+        "usable": int(usable(table).sum()),
         "regimes": {k: int(v) for k, v in ok["regime"].value_counts().items()} if len(ok) else {},
         "problems": [{"case_id": r.case_id, "status": r.status, "reason": r.flag_reason}
                      for r in problems.itertuples()],

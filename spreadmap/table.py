@@ -5,12 +5,24 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from .files import atomic_path
 
 FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
                  "mfr", "pd", "regime", "flagged", "flag_reason"]
+
+
+def usable(table: pd.DataFrame) -> np.ndarray:
+    """Rows fit for statistics and training: finished (status ok) and not flagged by a stability
+    bound. Columns that are absent impose nothing."""
+    ok = np.ones(len(table), dtype=bool)
+    if "status" in table.columns:
+        ok &= (table["status"] == "ok").to_numpy()
+    if "flagged" in table.columns:
+        ok &= ~table["flagged"].fillna(False).astype(bool).to_numpy()
+    return ok
 
 
 def read_benchmark(path: Path | str) -> dict:
