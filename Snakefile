@@ -25,6 +25,7 @@ include: "rules/converge.smk"
 include: "rules/surrogate.smk"
 include: "rules/maps.smk"
 include: "rules/pictures.smk"
+include: "rules/fidelity.smk"
 
 
 rule all:

@@ -7,6 +7,7 @@ import json
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import CASE_ID_PATTERN, case_id, rounded
 from spreadmap.design import NAMES
+from spreadmap.fidelity import knob_cases, knob_presets, preset_cases
 from spreadmap.sampling import chosen_points, halton, lattice
 from spreadmap.render import template_sha256
 from spreadmap.scene import UnsafeTimeStep, scene_parameters
@@ -18,7 +19,7 @@ except spreadmap_config.ConfigError as error:
 
 RETRIES = 1  # a case that produced nothing (crash, timeout) is tried once more, then recorded as failed
 CASES = {}  # case id -> scene parameters of the YADE script
-SETS = {}  # set name ("lds", "lattice", "points") -> list of (case id, label)
+SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list of (case id, label)
 RANGES = config.get("ranges")
 SCENE_SHA256 = template_sha256()
 SWEEPS = config.get("sweeps") or {}
@@ -75,6 +76,17 @@ for _i, _p in enumerate(_points):
     register("points", _p["point"], {"index": _i, "name": _p["name"]},
              preset=_p["preset"] or (config.get("points") or {}).get("preset"), seed=_p["seed"])
 
+# The fidelity study (`snakemake fidelity`): its own two sets, outside the main job. A knob value
+# is a preset of its own (spreadmap.fidelity), added to the presets here.
+FIDELITY_SETS = ("fidelity", "knobs")
+if config.get("fidelity"):
+    config["presets"].update(knob_presets(config))
+    for _i, _row in enumerate(preset_cases(config)):
+        register("fidelity", _row["point"], {"index": _i, "name": _row["name"]}, preset=_row["preset"], seed=_row["seed"])
+    for _i, _row in enumerate(knob_cases(config)):
+        register("knobs", _row["point"], {"index": _i, "name": _row["name"], "knob": _row["knob"], "value": _row["value"],
+                                          "is_base": _row["is_base"]}, preset=_row["preset"], seed=_row["seed"])
+
 
 GROW = config.get("converge", {})
 CONV = config.get("convergence", {})
@@ -96,7 +108,8 @@ def case_files(set_name, filename):
 
 
 def set_tables():
-    return [f"results/tables/{name}.csv" for name in SETS]
+    """The results tables of the main job: the sweeps and the chosen points (not the fidelity study)."""
+    return [f"results/tables/{name}.csv" for name in SETS if name not in FIDELITY_SETS]
 
 
 wildcard_constraints:

@@ -93,6 +93,10 @@ def _check_cross_keys(config: dict) -> None:
             make_config(config["surrogate"])
         except (ValueError, KeyError) as error:
             raise ConfigError(f"config key 'surrogate': {error}") from None
+    from .fidelity import check as check_fidelity
+
+    for problem in check_fidelity(config):
+        raise ConfigError(problem)
     for name, preset in presets.items():
         if preset["window_d"] < config["scene"]["blade_thickness_d"]:
             raise ConfigError(f"config key 'presets.{name}.window_d': value {preset['window_d']} is not allowed; "

@@ -7,6 +7,7 @@ hang inside YADE, out of reach of the in-run watchdog."""
 from __future__ import annotations
 
 import json
+import resource
 import os
 import shutil
 import signal
@@ -45,6 +46,7 @@ def run_case(script: Path | str, raw_out: Path | str, log_path: Path | str, time
     log_path.parent.mkdir(parents=True, exist_ok=True)
     cmd = [yade_executable(), "-n", "-j1", "-x", str(script.resolve()), str(raw_out.resolve())]
     start = time.time()
+    cpu_start = resource.getrusage(resource.RUSAGE_CHILDREN)
     with open(log_path, "w") as log:
         log.write("$ " + " ".join(cmd) + "\n")
         log.flush()
@@ -63,7 +65,10 @@ def run_case(script: Path | str, raw_out: Path | str, log_path: Path | str, time
         reason = f"yade exited with code {code} ({outcome}); see {log_path}"
     if outcome in ("ok", "blown") and not raw_out.exists():
         outcome, reason = "failed", f"yade exited {code} but wrote no raw result; see {log_path}"
-    return {"exit_code": code, "outcome": outcome, "wall_time": time.time() - start, "reason": reason}
+    cpu_end = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu_time = (cpu_end.ru_utime - cpu_start.ru_utime) + (cpu_end.ru_stime - cpu_start.ru_stime)
+    return {"exit_code": code, "outcome": outcome, "wall_time": time.time() - start, "cpu_time": cpu_time,
+            "reason": reason}
 
 
 def finished_simulation(path: Path | str, params: dict) -> dict | None:
@@ -91,6 +96,12 @@ def simulate(params: dict, script: Path | str, raw_out: Path | str, log_path: Pa
     else:
         result = run_case(script, simulated, log_path, params["timeout_s"])
         result["reused"] = False
+        if result["outcome"] in ("ok", "blown"):
+            # the CPU time of the YADE process (one core): the cost of the case, far less
+            # disturbed than its wall time by whatever else the machine runs
+            record = json.loads(simulated.read_text())
+            record["cpu_time"] = result["cpu_time"]
+            write_json_atomically(simulated, record)
     if result["outcome"] in ("ok", "blown"):
         with atomic_path(raw_out) as tmp:
             shutil.copyfile(simulated, tmp)

@@ -71,6 +71,7 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict) -> dict:
         "density_scale": p["density_scale"],
         "steps": raw.get("steps", math.nan), "simulated_time": raw.get("simulated_time", math.nan),
         "wall_time": raw.get("wall_time", math.nan),
+        "cpu_time": raw.get("cpu_time", math.nan),
         "peak_overlap_ratio": raw.get("peak_overlap_ratio", math.nan),
         "final_kinetic_energy": raw.get("final_kinetic_energy", math.nan),
         "final_ke_per_mgd": (raw["final_kinetic_energy"] / raw["kinetic_energy_scale"]

@@ -17,7 +17,7 @@ def raw_config():
 @pytest.mark.parametrize("change,message", [
     (lambda c: c["material"].update(poisson=0.6), r"'material\.poisson': value 0\.6 .* must be < 0\.5"),
     (lambda c: c["presets"]["default"].update(width_d="five"), r"'presets\.default\.width_d': value 'five' .* of type number"),
-    (lambda c: c.update(preset="fast"), r"'preset': value 'fast' .* one of the presets defined: \['default', 'reference', 'smoke'\]"),
+    (lambda c: c.update(preset="fastest"), r"'preset': value 'fastest' .* one of the presets defined: \['default', 'fast', 'reference', 'smoke'\]"),
     (lambda c: c.update(bogus=1), r"unknown config key\(s\) \['bogus'\] at the top level"),
     (lambda c: c["sweeps"]["lds"].update(partitions=[8, 1]), r"'sweeps\.lds\.partitions\[1\]': value 1 .* must be >= 2"),
     (lambda c: c["ranges"].update(d_um={"min": 50, "max": 10}), r"'ranges\.d_um': min 50 must be below max 10"),
@@ -37,7 +37,7 @@ def test_the_shipped_config_is_valid_and_defaults_are_filled(raw_config):
 
 
 @pytest.mark.parametrize("overrides,message", [
-    ({"preset": "fast"}, "config key 'preset': value 'fast' is not allowed"),
+    ({"preset": "fastest"}, "config key 'preset': value 'fastest' is not allowed"),
     ({"presets": {"default": {"time_step_s": 1e-6, "density_scale": 1}}},
      "presets.default.time_step_s': value 1e-06 s is above the Rayleigh critical step"),
 ])
