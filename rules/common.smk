@@ -7,7 +7,7 @@ import json
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import CASE_ID_PATTERN, case_id, rounded
 from spreadmap.design import NAMES
-from spreadmap.fidelity import knob_cases, knob_presets, preset_cases
+from spreadmap.fidelity_plan import knob_cases, knob_presets, preset_cases
 from spreadmap.sampling import chosen_points, halton, lattice
 from spreadmap.render import template_sha256
 from spreadmap.scene import UnsafeTimeStep, scene_parameters

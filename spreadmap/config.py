@@ -93,7 +93,7 @@ def _check_cross_keys(config: dict) -> None:
             make_config(config["surrogate"])
         except (ValueError, KeyError) as error:
             raise ConfigError(f"config key 'surrogate': {error}") from None
-    from .fidelity import check as check_fidelity
+    from .fidelity_plan import check as check_fidelity
 
     for problem in check_fidelity(config):
         raise ConfigError(problem)

@@ -1,0 +1,30 @@
+"""Snakemake entry: the fidelity study's tables, goal checks and figures from its two results tables."""
+import json
+from pathlib import Path
+
+import pandas as pd
+
+from spreadmap import fidelity_plots as plots
+from spreadmap import fidelity_study as study
+from spreadmap.files import write_text_atomically
+from spreadmap.logs import log_to
+
+log_to(snakemake)  # noqa: F821
+
+sm = snakemake  # noqa: F821
+reference = sm.params.reference
+per_point, presets = study.preset_errors(pd.read_csv(sm.input.presets), reference)
+knobs = study.knob_errors(pd.read_csv(sm.input.knobs)) if sm.input.get("knobs") else None
+goals = [study.goal(presets, name) for name in sm.params.goal_presets if name in set(presets["preset"])]
+
+per_point.to_csv(sm.output.per_point, index=False)
+presets.to_csv(sm.output.presets, index=False)
+(knobs if knobs is not None else pd.DataFrame()).to_csv(sm.output.knobs, index=False)
+summary = {"reference": reference, "presets": presets.to_dict("records"), "goals": goals,
+           "machine": study.machine_description(pd.read_csv(sm.input.presets))}
+write_text_atomically(sm.output.summary, json.dumps(summary, indent=1, default=float))
+write_text_atomically(sm.output.markdown, study.markdown_summary(presets, per_point, knobs, reference, goals))
+plots.pareto_figure(presets, reference, Path(sm.output.pareto).with_suffix(""))
+if knobs is not None:
+    plots.knobs_figure(knobs, sm.params.knob_preset, Path(sm.output.knobs_figure).with_suffix(""))
+print(Path(sm.output.markdown).read_text())

@@ -1,0 +1,110 @@
+"""Figures of the fidelity study: error against cost per preset (the Pareto figure) and the
+one-knob-at-a-time sweeps. Each figure is written as PNG and PDF with its numbers as CSV."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from .figures import save_figure
+from .fidelity_study import TARGETS
+
+TARGET_STYLE = {"mfr": ("MFR", "o", "tab:blue"), "pd": ("PD", "s", "tab:orange")}
+KNOB_LABELS = {"width_d": "bed width [d]", "heap_height_d": "heap height [d]",
+               "pile_length_min_d": "pile length [d] (particle count)", "heap_reserve": "heap reserve [-]",
+               "transient_d": "transient [d]", "window_d": "measurement window [d]",
+               "dt_factor": "time step / Rayleigh step [-]", "density_scale": "density scale [-] (1 = physical)"}
+
+
+def _figure(width: float, height: float) -> Figure:
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def pareto_front(cost: np.ndarray, error: np.ndarray) -> np.ndarray:
+    """Indices of the presets no other preset beats on both cost and error, cheapest first."""
+    order = np.argsort(cost, kind="stable")
+    front, best = [], np.inf
+    for i in order:
+        if error[i] < best:
+            front.append(i)
+            best = error[i]
+    return np.asarray(front, dtype=int)
+
+
+def pareto_figure(presets: pd.DataFrame, reference: str, path_stem) -> dict:
+    """Mean relative error of MFR and PD against the reference (over the points) versus the median
+    CPU time per case; bars are the resolution of that error (2 standard errors of the seed means).
+    The reference is drawn at its cost with its own seed-to-seed spread as the noise floor."""
+    fig = _figure(7.5, 4.8)
+    ax = fig.add_subplot()
+    others = presets[presets["preset"] != reference].reset_index(drop=True)
+    ref = presets[presets["preset"] == reference].iloc[0]
+    cost = others["cpu_s_median"].to_numpy(dtype=float)
+    offsets = {"mfr": 0.96, "pd": 1.04}  # side by side at the same cost
+    for t in TARGETS:
+        label, marker, colour = TARGET_STYLE[t]
+        err = 100 * others[f"{t}_mean_abs_rel_error"].to_numpy(dtype=float)
+        res = 100 * others[f"{t}_mean_rel_resolution"].to_numpy(dtype=float)
+        resolved = others[f"{t}_chi2_p"].to_numpy(dtype=float) < 0.05
+        ax.errorbar(cost * offsets[t], err, yerr=res, fmt="none", ecolor=colour, capsize=3)
+        ax.plot(cost[resolved] * offsets[t], err[resolved], marker, color=colour, ms=7, ls="none",
+                label=f"{label}: mean |error| over the points (filled: resolved, hollow: within noise)")
+        ax.plot(cost[~resolved] * offsets[t], err[~resolved], marker, mfc="white", mec=colour, ms=7, ls="none")
+        front = pareto_front(cost, err)
+        ax.plot(cost[front] * offsets[t], err[front], "-", color=colour, lw=1, alpha=0.6)
+        spread = 100 * ref[f"{t}_seed_cv"]
+        ax.axhspan(0, spread, color=colour, alpha=0.08)
+    ax.axhline(5, color="k", ls="--", lw=0.8)
+    ax.text(cost.min() * 0.8 if len(cost) else 1, 5, " goal 5 %", va="bottom", fontsize=8)
+    for _, row in others.iterrows():
+        ax.annotate(f"{row['preset']}\n{row['cost_ratio_to_reference']:.0f}x cheaper",
+                    (row["cpu_s_median"], 100 * max(row["mfr_mean_abs_rel_error"], row["pd_mean_abs_rel_error"])),
+                    textcoords="offset points", xytext=(8, 6), fontsize=8)
+    ax.plot([ref["cpu_s_median"]], [0], "*", color="k", ms=12, clip_on=False, zorder=5,
+            label=f"{reference} (error 0 by definition; shading: its seed-to-seed spread)")
+    ax.annotate(reference, (ref["cpu_s_median"], 0), textcoords="offset points", xytext=(0, 10), ha="center",
+                fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xlabel("cost: median CPU time per case [s] (one core)")
+    ax.set_ylabel(f"error against '{reference}' [%]")
+    ax.set_ylim(bottom=0)
+    ax.set_title("Speed against accuracy: each preset's error of MFR and PD and its cost\n"
+                 "(bars: resolution, 2 standard errors of the seed means)", fontsize=10)
+    ax.legend(fontsize=7, loc="upper right")
+    ax.grid(True, which="both", alpha=0.3)
+    return save_figure(fig, path_stem, presets)
+
+
+def knobs_figure(knobs: pd.DataFrame, base_preset: str, path_stem) -> dict:
+    """One panel per knob: MFR and PD (seed mean, bar = seed SD) against the knob value, the base
+    preset's value marked, the cost relative to it written above each value."""
+    names = list(dict.fromkeys(knobs["knob"]))
+    ncols = min(3, len(names))
+    nrows = int(np.ceil(len(names) / ncols))
+    fig = _figure(4.2 * ncols, 3.4 * nrows)
+    axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
+    for ax, knob in zip(axes, names):
+        rows = knobs[knobs["knob"] == knob].sort_values("value")
+        x = rows["value"].to_numpy(dtype=float)
+        for t in TARGETS:
+            label, marker, colour = TARGET_STYLE[t]
+            ax.errorbar(x, rows[f"{t}_mean"], yerr=rows[f"{t}_sd"], fmt=marker + "-", color=colour,
+                        capsize=3, label=label)
+        base = rows[rows["is_base"]]
+        if len(base):
+            ax.axvline(float(base["value"].iloc[0]), color="0.5", ls=":", lw=1)
+        if knob == "density_scale" or (x.min() > 0 and x.max() / x.min() > 20):
+            ax.set_xscale("log")
+        ax.set_xticks(x, [f"{xi:g}\n{ratio:.2g}x" for xi, ratio in zip(x, rows["cost_ratio_to_base"])], fontsize=8)
+        ax.minorticks_off()
+        ax.set_xlabel(KNOB_LABELS.get(knob, knob) + "\n(value, CPU cost relative to the base)", fontsize=9)
+        ax.set_ylabel("MFR, PD [-]")
+        ax.grid(True, alpha=0.3)
+    for ax in axes[len(names):]:
+        ax.set_visible(False)
+    axes[0].legend(fontsize=8, loc="lower left")
+    fig.suptitle(f"One knob at a time from '{base_preset}' (dotted: its value; bars: seed SD)", fontsize=10)
+    return save_figure(fig, path_stem, knobs)
