@@ -23,7 +23,7 @@ rule fidelity_analysis:
         summary="results/fidelity/summary.json",
         markdown="results/fidelity/summary.md",
         pareto=report("results/fidelity/pareto.png", caption="captions/fidelity_pareto.rst", category="Fidelity"),
-        **({"knobs_figure": report("results/fidelity/knobs.png", caption="captions/fidelity_knobs.rst",
+        **({"knobs_figure": report("results/fidelity/knob_sweeps.png", caption="captions/fidelity_knobs.rst",
                                    category="Fidelity")} if KNOBS else {}),
     params:
         reference=FIDELITY.get("reference"),

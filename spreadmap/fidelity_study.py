@@ -224,17 +224,8 @@ def markdown_summary(presets: pd.DataFrame, per_point: pd.DataFrame, knobs: pd.D
 
 
 def machine_description(table: pd.DataFrame) -> dict:
-    """Where and when the numbers were measured: date, CPU model, cores, YADE version."""
-    import datetime
-    import os
-    import platform
+    """Where and when the numbers were measured, with the YADE versions of the cases."""
+    from .machine import description
 
-    cpu = platform.processor() or ""
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next((line.split(":", 1)[1].strip() for line in fh if line.startswith("model name")), cpu)
-    except OSError:
-        pass
     versions = sorted(set(table.get("yade_version", pd.Series(dtype=str)).dropna().astype(str)))
-    return {"date": datetime.date.today().isoformat(), "cpu": cpu, "cores": os.cpu_count(),
-            "system": platform.platform(), "yade": versions}
+    return {**description(), "yade": versions}

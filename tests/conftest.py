@@ -12,6 +12,7 @@ import pytest
 
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import case_id, rounded
+from spreadmap.dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 from spreadmap.launcher import run_case
 from spreadmap.files import write_text_atomically
 from spreadmap.render import render
@@ -104,20 +105,6 @@ def snakemake(wf: Path, *args, timeout: float = 600):
 
     return subprocess.run([SNAKEMAKE, *args], cwd=wf, capture_output=True, text=True, timeout=timeout)
 
-
-def planned_jobs(dry_run_output: str) -> dict:
-    """Job counts from the 'Job stats' table of a dry run."""
-    counts, inside = {}, False
-    for line in dry_run_output.splitlines():
-        if line.startswith("Job stats"):
-            inside, counts = True, {}
-            continue
-        parts = line.split()
-        if inside and len(parts) == 2 and parts[1].isdigit():
-            counts[parts[0]] = int(parts[1])
-        elif inside and parts[:1] == ["total"]:
-            inside = False
-    return counts
 
 
 # Small, fast smoke sweeps for workflow tests: large particles only (a few seconds per case).

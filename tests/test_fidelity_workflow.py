@@ -37,7 +37,7 @@ def study(tmp_path_factory):
 def test_every_output_written_and_nothing_left_to_do(study):
     out = study / "results" / "fidelity"
     for name in ("per_point.csv", "presets.csv", "knobs.csv", "summary.json", "summary.md", "pareto.png",
-                 "pareto.pdf", "knobs.png", "knobs.pdf"):
+                 "pareto.pdf", "knob_sweeps.png", "knob_sweeps.pdf"):
         assert (out / name).stat().st_size > 0, name
     again = snakemake(study, "fidelity", "-n")
     assert again.returncode == 0 and "Nothing to be done" in again.stdout + again.stderr
