@@ -128,7 +128,9 @@ def preset_errors(table: pd.DataFrame, reference: str) -> tuple[pd.DataFrame, pd
                     "cpu_s_total": cases["cpu_time"].sum(),
                     "cost_ratio_to_reference": ref_cpu / cases["cpu_time"].sum(),
                     "particle_steps_per_s": (cases["n_particles"] * cases["steps"] / cases["cpu_time"]).median(),
-                    "n_particles_median": cases["n_particles"].median()})
+                    "n_particles_median": cases["n_particles"].median(),
+                    "flagged_cases": int(cases["flagged"].fillna(False).astype(bool).sum()),
+                    "peak_overlap_max": cases["peak_overlap_ratio"].max()})
         rows.append(row)
     return per_point, pd.DataFrame(rows)
 
@@ -195,13 +197,14 @@ def markdown_summary(presets: pd.DataFrame, per_point: pd.DataFrame, knobs: pd.D
              "the points of the seed-to-seed coefficient of variation. Cost: CPU time of one YADE process "
              "(one core); \"cost vs reference\": the reference's total CPU time over the preset's.", "",
              "| preset | spheres (median) | CPU per case, median / max | wall per case, median | cost vs reference "
-             "| particle-steps/s | MFR error | PD error | seed spread MFR / PD | usable cases |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "| particle-steps/s | MFR error | PD error | seed spread MFR / PD | usable cases | peak overlap (max) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for _, r in presets.iterrows():
         lines.append(f"| {r['preset']} | {r['n_particles_median']:.0f} | {r['cpu_s_median']:.1f} s / {r['cpu_s_max']:.0f} s "
                      f"| {r['wall_s_median']:.1f} s | {r['cost_ratio_to_reference']:.1f}x cheaper "
                      f"| {r['particle_steps_per_s']:.2e} | {r['mfr_verdict']} | {r['pd_verdict']} "
-                     f"| {_pct(r['mfr_seed_cv'])} / {_pct(r['pd_seed_cv'])} | {r['usable_cases']}/{r['cases']} |")
+                     f"| {_pct(r['mfr_seed_cv'])} / {_pct(r['pd_seed_cv'])} | {r['usable_cases']}/{r['cases']} "
+                     f"| {_pct(r['peak_overlap_max'])} R |")
     lines += ["", "### Per point (seed mean +- seed SD)", "",
               "| point | preset | MFR | PD | MFR error | PD error | CPU per case |", "|---|---|---|---|---|---|---|"]
     for _, r in per_point.sort_values(["name", "preset"], kind="stable").iterrows():

@@ -90,6 +90,7 @@ def test_bad_fidelity_config_is_refused_with_the_key(shipped, change, message):
 # ---------------------------------------------------------------------------------------------
 def _cases(preset, name, mfr, pd_, cpu, n=100, steps=1000):
     return [{"preset": preset, "name": name, "seed": i, "mfr": m, "pd": p, "status": "ok", "flagged": False,
+             "peak_overlap_ratio": 0.01,
              "cpu_time": cpu, "wall_time": 2 * cpu, "n_particles": n, "steps": steps}
             for i, (m, p) in enumerate(zip(mfr, pd_))]
 
@@ -133,6 +134,7 @@ def test_failed_and_flagged_cases_are_counted_but_kept_out_of_the_means():
     row = per_point.set_index(["preset", "name"]).loc[("cheap", "a")]
     assert row["cases"] == 4 and row["usable_cases"] == 3
     assert row["mfr_mean"] == pytest.approx(0.36)
+    assert presets.set_index("preset").loc["cheap", "flagged_cases"] == 1
 
 
 def test_goal_states_met_not_met_and_not_resolved():
