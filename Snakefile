@@ -4,6 +4,7 @@
 #   snakemake points             your chosen points only (config `points:`)
 #   snakemake sweeps             the sweeps' results tables and the run summary
 #   snakemake converge           grow the LDS sweep until its statistics converge (or the budget)
+#   snakemake fidelity           each preset's error against `reference`, its noise and its cost
 #   snakemake --report report.html   every figure with its caption, the tables and the summary
 from snakemake.utils import min_version
 
