@@ -3,9 +3,12 @@ preset, its seed-to-seed spread and its cost; and the same for each value of eac
 the base preset's own value.
 
 Errors are differences of seed means. Their noise is the standard error of that difference,
-sqrt(s_a^2/n_a + s_b^2/n_b) with s the seed-to-seed standard deviation (ddof = 1); an error
-within twice its standard error (about a 95 % interval) is not resolved by the seeds run, and is
-reported as "within noise" together with that resolution, never as an error of zero.
+sqrt(s_a^2/n_a + s_b^2/n_b) with s the seed-to-seed standard deviation (ddof = 1). At one point
+(and for a knob value) an error within twice its standard error (about a 95 % interval) is not
+resolved by the seeds run. A preset's error is the mean |relative error| over the points; it is
+"within noise" when a chi-square test of the points' errors against their standard errors does
+not reject "no error" at 5 %, and it is reported with its noise floor (the mean |error| a preset
+without any systematic error would show), never as an error of zero.
 
 Cost is the CPU time of the YADE process (one core), far less disturbed by whatever else the
 machine runs than wall time, which is reported beside it.
