@@ -77,7 +77,7 @@ for _i, _p in enumerate(_points):
              preset=_p["preset"] or (config.get("points") or {}).get("preset"), seed=_p["seed"])
 
 # The fidelity study (`snakemake fidelity`): its own two sets, outside the main job. A knob value
-# is a preset of its own (spreadmap.fidelity), added to the presets here.
+# is a preset of its own (spreadmap.fidelity_plan), added to the presets here.
 FIDELITY_SETS = ("fidelity", "knobs")
 if config.get("fidelity"):
     config["presets"].update(knob_presets(config))

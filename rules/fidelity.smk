@@ -38,7 +38,14 @@ rule fidelity_analysis:
         "../scripts/fidelity.py"
 
 
+def fidelity_outputs(wildcards):
+    if not FIDELITY:
+        raise WorkflowError("spreadmap: `snakemake fidelity` needs a `fidelity:` section in the config "
+                            "(points, presets, seeds, reference; see the shipped config.yaml)")
+    return list(rules.fidelity_analysis.output)
+
+
 rule fidelity:
     """`snakemake fidelity`: the whole fidelity study."""
     input:
-        rules.fidelity_analysis.output,
+        fidelity_outputs,

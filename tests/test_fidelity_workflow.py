@@ -92,3 +92,10 @@ def test_knob_sweep_shares_the_base_cases(study):
     shared = set(cases.loc[cases["is_base"], "case_id"])
     assert shared <= set(fidelity["case_id"])  # run once, used by both tables
     assert set(cases.loc[~cases["is_base"], "preset"]) == {"smoke_dt_factor_0p25"}
+
+
+def test_fidelity_target_without_its_config_section_says_what_is_missing(tmp_path):
+    wf = make_workflow(tmp_path, {}, drop=("fidelity",))
+    run = snakemake(wf, "-n", "fidelity")
+    assert run.returncode != 0
+    assert "`snakemake fidelity` needs a `fidelity:` section in the config" in run.stdout + run.stderr
