@@ -52,9 +52,10 @@ def test_cases_table_and_cpu_time(study):
     assert len(table) == 2 * 2 * 2
     assert set(table["preset"]) == {"smoke", "smoke_fine"} and set(table["seed"]) == {1, 2}
     assert (table["status"] == "ok").all()
-    # CPU time of the YADE process: positive, and not above its wall time (one thread)
+    # CPU time of the YADE process: positive, and not above its wall time (one thread); the table's
+    # wall time is YADE's own clock, which starts after YADE's start-up (~1.5 CPU s)
     assert (table["cpu_time"] > 0.5).all()
-    assert (table["cpu_time"] <= 1.05 * table["wall_time"] + 1.5).all()
+    assert (table["cpu_time"] <= 1.05 * table["wall_time"] + 3.0).all(), table[["cpu_time", "wall_time"]]
     # different seeds are different packings
     a = table[(table["name"] == "a") & (table["preset"] == "smoke")].sort_values("seed")
     assert a["mfr"].iloc[0] != a["mfr"].iloc[1]
