@@ -13,7 +13,8 @@ log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 reference = sm.params.reference
-per_point, presets = study.preset_errors(pd.read_csv(sm.input.presets), reference)
+cases = pd.read_csv(sm.input.presets)
+per_point, presets = study.preset_errors(cases, reference)
 knobs = study.knob_errors(pd.read_csv(sm.input.knobs)) if sm.input.get("knobs") else None
 goals = [study.goal(presets, name) for name in sm.params.goal_presets if name in set(presets["preset"])]
 
@@ -21,7 +22,7 @@ per_point.to_csv(sm.output.per_point, index=False)
 presets.to_csv(sm.output.presets, index=False)
 (knobs if knobs is not None else pd.DataFrame()).to_csv(sm.output.knobs, index=False)
 summary = {"reference": reference, "presets": presets.to_dict("records"), "goals": goals,
-           "machine": study.machine_description(pd.read_csv(sm.input.presets))}
+           "machine": study.machine_description(cases)}
 write_text_atomically(sm.output.summary, json.dumps(summary, indent=1, default=float))
 write_text_atomically(sm.output.markdown, study.markdown_summary(presets, per_point, knobs, reference, goals))
 plots.pareto_figure(presets, reference, Path(sm.output.pareto).with_suffix(""))

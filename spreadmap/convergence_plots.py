@@ -13,12 +13,10 @@ from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
 from . import convergence as cv
-from .figures import save_figure
+from .figures import new_figure, save_figure
 from .table import usable
 
 TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
@@ -30,12 +28,6 @@ STAT_LABELS = {
     "skewness": "skewness [-]",
 }
 N_LABEL = "number of cases N [-]"
-
-
-def _new_figure(width: float, height: float) -> Figure:
-    fig = Figure(figsize=(width, height), layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
 
 
 def _label(target: str) -> str:
@@ -84,7 +76,7 @@ def plot_distributions(long_df: pd.DataFrame, path_stem,
     the y axis so the sweeps compare directly.
     """
     sweeps = list(dict.fromkeys(long_df["sweep"]))
-    fig = _new_figure(4.2 * len(sweeps), 3.0 * len(targets))
+    fig = new_figure(4.2 * len(sweeps), 3.0 * len(targets))
     axes = fig.subplots(len(targets), len(sweeps), squeeze=False, sharey="row")
     for i, t in enumerate(targets):
         for j, s in enumerate(sweeps):
@@ -135,7 +127,7 @@ def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
     """
     long_df = pd.concat([_stats_long(k, v, targets, tolerance, floors) for k, v in sweeps.items()],
                         ignore_index=True)
-    fig = _new_figure(4.5 * len(targets), 2.4 * len(cv.STATISTICS))
+    fig = new_figure(4.5 * len(targets), 2.4 * len(cv.STATISTICS))
     axes = fig.subplots(len(cv.STATISTICS), len(targets), squeeze=False, sharex=True)
     colors = {name: f"C{i}" for i, name in enumerate(sweeps)}
     for j, t in enumerate(targets):
@@ -184,7 +176,7 @@ def plot_sampling_study(table: pd.DataFrame, path_stem,
     groups = [g for g in order if g in present] + sorted(present - set(order))
     method_color = {"lds": "C0", "random": "C1", "lattice": "C2"}
     functions = list(dict.fromkeys(summ["function"]))
-    fig = _new_figure(max(6.0, 2.4 * len(functions)), 4.8)
+    fig = new_figure(max(6.0, 2.4 * len(functions)), 4.8)
     ax = fig.subplots()
     width = 0.8 / max(len(groups), 1)
     for gi, (method, sched) in enumerate(groups):

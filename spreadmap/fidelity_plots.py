@@ -4,23 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
-from .figures import save_figure
-from .fidelity_study import TARGETS
+from .figures import new_figure, save_figure
+from .design import TARGETS
 
 TARGET_STYLE = {"mfr": ("MFR", "o", "tab:blue"), "pd": ("PD", "s", "tab:orange")}
 KNOB_LABELS = {"width_d": "bed width [d]", "heap_height_d": "heap height [d]",
                "pile_length_min_d": "pile length [d] (particle count)", "heap_reserve": "heap reserve [-]",
                "transient_d": "transient [d]", "window_d": "measurement window [d]",
                "dt_factor": "time step / Rayleigh step [-]", "density_scale": "density scale [-] (1 = physical)"}
-
-
-def _figure(width: float, height: float) -> Figure:
-    fig = Figure(figsize=(width, height), layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
 
 
 def pareto_front(cost: np.ndarray, error: np.ndarray) -> np.ndarray:
@@ -38,7 +30,7 @@ def pareto_figure(presets: pd.DataFrame, reference: str, path_stem) -> dict:
     """Mean relative error of MFR and PD against the reference (over the points) versus the median
     CPU time per case; bars are the resolution of that error (2 standard errors of the seed means).
     Dashes mark each preset's noise floor; hollow markers are errors within the noise."""
-    fig = _figure(7.5, 4.8)
+    fig = new_figure(7.5, 4.8)
     ax = fig.add_subplot()
     others = presets[presets["preset"] != reference].reset_index(drop=True)
     ref = presets[presets["preset"] == reference].iloc[0]
@@ -86,7 +78,7 @@ def knobs_figure(knobs: pd.DataFrame, base_preset: str, path_stem) -> dict:
     names = list(dict.fromkeys(knobs["knob"]))
     ncols = min(3, len(names))
     nrows = int(np.ceil(len(names) / ncols))
-    fig = _figure(4.2 * ncols, 3.4 * nrows)
+    fig = new_figure(4.2 * ncols, 3.4 * nrows)
     axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False)).ravel()
     for ax, knob in zip(axes, names):
         rows = knobs[knobs["knob"] == knob].sort_values("value")

@@ -21,9 +21,9 @@ import numpy as np
 import pandas as pd
 from scipy.stats import chi2 as chi2_dist
 
+from .design import TARGETS
 from .table import usable
 
-TARGETS = ("mfr", "pd")
 RESOLVED_SIGMAS = 2.0  # an error beyond this many standard errors is resolved
 
 
