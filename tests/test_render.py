@@ -42,3 +42,19 @@ def test_rerun_by_hand_reproduces_the_recorded_result(config, tmp_path):
     first, second = (case_metrics(r, config["regime"], config["stability"]) for r in (raw, again))
     assert (first["mfr"], first["pd"], first["steps"]) == (second["mfr"], second["pd"], second["steps"])
     assert raw["snapshots"]["window_end"]["positions"] == again["snapshots"]["window_end"]["positions"]
+
+
+@pytest.mark.yade
+def test_the_run_ends_in_the_step_that_ends_it(config, tmp_path):
+    """The end state is taken inside the step that ends the run, and nothing runs after it: with
+    the monitor due in that very step, it does not record the end twice, and the step counters are
+    those after the ending step (YADE's thread may still be completing it when O.wait() returns)."""
+    params = case_params(config, {"f": 0.3, "d_um": 45.0, "h_um": 65.0, "v_mm_s": 12.0},
+                         control_every=100, monitor_every=100)
+    result, raw = run_scene(params, tmp_path)
+    assert result["outcome"] == "ok"
+    end = raw["snapshots"]["window_end"]
+    times = [t for t, _, _ in raw["behind_series"]]
+    assert times[-1] == end["time"] and times[-2] < times[-1]
+    assert raw["steps"] == end["iter"] + 1 and raw["steps"] % 100 == 1
+    assert raw["simulated_time"] == end["time"] + raw["time_step"]

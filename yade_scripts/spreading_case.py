@@ -196,13 +196,34 @@ def max_speed():
 
 
 def finish(status, reason=""):
+    """End the run in this step; the first reason to end it wins. The end state is taken here,
+    inside the step: O.pause() makes O.wait() return at once, while YADE's thread still completes
+    the step (the engines after this one, then iter and time advance), so whatever the main thread
+    reads of the simulation after O.wait() races with that thread."""
+    if state["status"] is not None:
+        return
     state["status"], state["reason"] = status, reason
+    state["end"] = end_state()
     O.pause()
+
+
+def end_state():
+    """What the raw record says of the end. The step in progress ends the run: `steps` and
+    `simulated_time` are the counters after it (YADE adds dt to time and 1 to iter at its end);
+    positions and velocities are final already (NewtonIntegrator has run in this step)."""
+    on_floor = [b for b in spheres() if x_lo <= b.state.pos[0] <= x_hi]
+    escaped = sum(1 for b in on_floor  # through a side wall or the floor, or thrown far upwards
+                  if not (-R <= b.state.pos[1] <= W + R and -R <= b.state.pos[2] <= z_hi))
+    return {"steps": O.iter + 1, "simulated_time": O.time + O.dt,
+            "rolled_off": len(sphere_ids) - len(on_floor),  # beyond the ends of the floor, falling
+            "escaped": escaped, "max_speed": max_speed(), "kinetic_energy": utils.kineticEnergy()}
 
 
 def watchdog():
     """Velocity bound, every few dozen steps. The kinetic energy (computed in C++) is a cheap
     pre-filter: it exceeds one sphere's energy at the speed bound whenever any sphere does."""
+    if state["status"] is not None:  # the run has ended in this step
+        return
     ke = utils.kineticEnergy()
     if not math.isfinite(ke):
         finish("blown", "non-finite kinetic energy at step %d" % O.iter)
@@ -233,6 +254,8 @@ def monitor():
     """Every monitor_every steps: peak overlap, spheres that rolled off the ends of the floor
     (removed: they would fall and accelerate for ever; the volume of those that had passed behind
     the blade stays counted as passed), and the volume passed under the blade."""
+    if state["status"] is not None:  # the run has ended in this step
+        return
     peak = state["peak_overlap_ratio"]
     for i in O.interactions:
         if i.isReal:
@@ -263,6 +286,8 @@ def start_phase(name):
 
 
 def control():
+    if state["status"] is not None:  # the run has ended in this step
+        return
     phase, elapsed = state["phase"], O.time - state["phase_start"]
     if phase == "settle":
         if (elapsed > 0.2 * P["settle_max_time"] and kinetic_energy_settled()) or elapsed > P["settle_max_time"]:
@@ -314,10 +339,8 @@ log("start: %d spheres d = %.1f um, gap %.1f um, v = %.2f mm/s, f = %.3f, dt = %
 O.run()
 O.wait()
 
-on_floor = [b for b in spheres() if x_lo <= b.state.pos[0] <= x_hi]
-escaped = sum(1 for b in on_floor  # through a side wall or the floor, or thrown far upwards
-              if not (-R <= b.state.pos[1] <= W + R and -R <= b.state.pos[2] <= z_hi))
-state["rolled_off"] += len(sphere_ids) - len(on_floor)  # beyond the ends of the floor, falling
+# From here on, only what finish() recorded: nothing is read from the simulation (see finish).
+end = state["end"]
 raw = {
     "format": "spreadmap-raw-1",
     "status": state["status"],
@@ -328,8 +351,8 @@ raw = {
     "time_step": O.dt,
     "critical_time_step": dt_crit,
     "time_step_ratio": O.dt / dt_crit,
-    "steps": O.iter,
-    "simulated_time": O.time,
+    "steps": end["steps"],
+    "simulated_time": end["simulated_time"],
     "wall_time": time.time() - wall_start,
     "phase_times": state["phase_times"],
     "settled_top": state.get("settled_top"),
@@ -340,16 +363,16 @@ raw = {
     "geometry": {"width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
                  "floor_x": [x_lo, x_hi], "pile_length": L},
     "peak_overlap_ratio": state["peak_overlap_ratio"],
-    "max_speed_seen": max(state["max_speed_seen"], max_speed()),
-    "final_kinetic_energy": utils.kineticEnergy(),
+    "max_speed_seen": max(state["max_speed_seen"], end["max_speed"]),
+    "final_kinetic_energy": end["kinetic_energy"],
     "kinetic_energy_scale": ke_scale,
-    "escaped_particles": escaped,
-    "rolled_off_particles": state["rolled_off"],
+    "escaped_particles": end["escaped"],
+    "rolled_off_particles": state["rolled_off"] + end["rolled_off"],
     "max_speed_by_phase": state["max_speed_by_phase"],
     "behind_series": state["behind_series"],
     "snapshots": state["snapshots"],
 }
 write_atomically(out_path, raw)
 log("done: status %s %s; %d steps, %.4g s simulated, %.1f s wall; raw result in %s"
-    % (state["status"], state["reason"], O.iter, O.time, raw["wall_time"], out_path))
+    % (state["status"], state["reason"], raw["steps"], raw["simulated_time"], raw["wall_time"], out_path))
 sys.exit(EXIT_OK if state["status"] == "ok" else EXIT_BLOWN)
