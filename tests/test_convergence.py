@@ -1,6 +1,5 @@
 """Tests of spreadmap.convergence: statistics, the near-zero rule, the detectors, the stop rule."""
 import json
-import time
 
 import numpy as np
 import pandas as pd
@@ -181,10 +180,7 @@ def test_group_mode_for_lattices():
 def test_running_statistics_equal_per_n_recomputation():
     rng = np.random.default_rng(5)
     y = np.column_stack([rng.gamma(3.0, 0.1, 2000), rng.beta(5, 3, 2000) * 0.74])
-    t0 = time.perf_counter()
     run = cv.running_statistics(y, start=3)
-    elapsed = time.perf_counter() - t0
-    assert elapsed < 1.0
     assert list(run.index) == list(range(3, 2001))
     assert list(run.columns) == [f"{t}_{s}" for t in ("mfr", "pd") for s in cv.STATISTICS]
     for n in list(range(3, 40)) + list(range(40, 2001, 97)) + [2000]:
