@@ -48,6 +48,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 
 from spreadmap.design import BY_NAME, NAMES, bounds  # noqa: E402
 from spreadmap.figures import save_figure  # noqa: E402
+from spreadmap.metrics import classify  # noqa: E402
 from spreadmap.table import usable  # noqa: E402
 
 Predictor = Callable[[np.ndarray], np.ndarray]
@@ -585,14 +586,12 @@ def parallel_coordinates(
 
 
 def classify_regime(mfr, pd_, jam_mfr_max: float, short_feed_pd_min: float) -> np.ndarray:
-    """Threshold rules on (MFR, PD): jamming if MFR < jam_mfr_max, else short feed if
-    PD < short_feed_pd_min, else normal.  Jamming takes precedence."""
-    mfr = np.asarray(mfr, float)
-    pd_ = np.asarray(pd_, float)
-    out = np.full(mfr.shape, "normal", dtype=object)
-    out[pd_ < short_feed_pd_min] = "short_feed"
-    out[mfr < jam_mfr_max] = "jamming"
-    return out
+    """The DEM cases' rule (:func:`spreadmap.metrics.classify`: jamming if MFR < jam_mfr_max,
+    else short feed if PD < short_feed_pd_min, else normal) on arrays of predictions. A prediction
+    has no layer-density scatter, so the rule's scatter bound imposes nothing here."""
+    rules = {"jam_mfr_max": jam_mfr_max, "short_feed_pd_min": short_feed_pd_min, "short_feed_cv_max": np.inf}
+    return np.vectorize(lambda m, p: classify(m, p, 0.0, rules), otypes=[object])(
+        np.asarray(mfr, float), np.asarray(pd_, float))
 
 
 def regime_overlay(
