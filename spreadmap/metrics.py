@@ -17,6 +17,8 @@ import numpy as np
 from .geometry import sphere_box_volume
 from .scene import DENSEST_PACKING
 
+PHASES = ("settle", "relax", "move")  # the phases of the scene, in order (yade_scripts/spreading_case.py)
+
 REGIMES = ("normal", "jamming", "short_feed")
 
 
@@ -73,6 +75,8 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict) -> dict:
         "wall_time": raw.get("wall_time", math.nan),
         "cpu_time": raw.get("cpu_time", math.nan),
         "peak_overlap_ratio": raw.get("peak_overlap_ratio", math.nan),
+        # where it happened: the fall into the pile, the pile at rest, the spreading
+        **{f"peak_overlap_{phase}": raw.get("peak_overlap_by_phase", {}).get(phase, math.nan) for phase in PHASES},
         "final_kinetic_energy": raw.get("final_kinetic_energy", math.nan),
         "final_ke_per_mgd": (raw["final_kinetic_energy"] / raw["kinetic_energy_scale"]
                              if "kinetic_energy_scale" in raw else math.nan),

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from spreadmap.metrics import case_metrics, classify, layer_density, mass_flow_ratio, passed_volume
+from spreadmap.metrics import PHASES, case_metrics, classify, layer_density, mass_flow_ratio, passed_volume
 
 D = 1.0  # work in units of the diameter
 R = 0.5 * D
@@ -108,3 +108,11 @@ def test_case_metrics_of_a_clean_case():
 def test_a_broken_stability_bound_flags_the_case(kind, expected):
     m = case_metrics(raw_record(**kind), RULES, BOUNDS)
     assert m["flagged"] and expected in m["flag_reason"]
+
+
+def test_peak_overlap_by_phase_columns():
+    raw = raw_record(overlap=0.03)
+    assert all(math.isnan(case_metrics(raw, RULES, BOUNDS)[f"peak_overlap_{p}"]) for p in PHASES)  # older records
+    raw["peak_overlap_by_phase"] = {"settle": 0.03, "relax": 0.004, "move": 0.01}
+    m = case_metrics(raw, RULES, BOUNDS)
+    assert [m[f"peak_overlap_{p}"] for p in PHASES] == [0.03, 0.004, 0.01]

@@ -179,6 +179,7 @@ O.engines = [
 
 state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": None,
          "peak_overlap_ratio": 0.0, "rolled_off": 0, "removed_behind_volume": 0.0, "max_speed_seen": 0.0, "status": None, "reason": "",
+         "peak_overlap_by_phase": {},
          "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start}
 single_particle_ke_bound = 0.5 * mass * P["max_speed"] ** 2
 
@@ -256,13 +257,10 @@ def monitor():
     the blade stays counted as passed), and the volume passed under the blade."""
     if state["status"] is not None:  # the run has ended in this step
         return
-    peak = state["peak_overlap_ratio"]
-    for i in O.interactions:
-        if i.isReal:
-            peak = max(peak, i.geom.penetrationDepth / R)
-    state["peak_overlap_ratio"] = peak
-    by_phase = state["max_speed_by_phase"]
-    by_phase[state["phase"]] = max(by_phase.get(state["phase"], 0.0), max_speed())
+    overlap = max([i.geom.penetrationDepth / R for i in O.interactions if i.isReal] or [0.0])
+    state["peak_overlap_ratio"] = max(state["peak_overlap_ratio"], overlap)
+    for by_phase, value in ((state["peak_overlap_by_phase"], overlap), (state["max_speed_by_phase"], max_speed())):
+        by_phase[state["phase"]] = max(by_phase.get(state["phase"], 0.0), value)
     fallen = [b for b in spheres() if b.state.pos[2] < -2.0 * d]
     for b in fallen:
         if state["blade"] is not None and b.state.pos[0] < blade_rear_x():
@@ -363,6 +361,7 @@ raw = {
     "geometry": {"width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
                  "floor_x": [x_lo, x_hi], "pile_length": L},
     "peak_overlap_ratio": state["peak_overlap_ratio"],
+    "peak_overlap_by_phase": state["peak_overlap_by_phase"],  # settle (the fall), relax, move (spreading)
     "max_speed_seen": max(state["max_speed_seen"], end["max_speed"]),
     "final_kinetic_energy": end["kinetic_energy"],
     "kinetic_energy_scale": ke_scale,
