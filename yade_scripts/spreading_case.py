@@ -197,14 +197,16 @@ def max_speed():
 
 
 def finish(status, reason=""):
-    """End the run in this step; the first reason to end it wins. The end state is taken here,
-    inside the step: O.pause() makes O.wait() return at once, while YADE's thread still completes
-    the step (the engines after this one, then iter and time advance), so whatever the main thread
-    reads of the simulation after O.wait() races with that thread."""
-    if state["status"] is not None:
-        return
+    """End the run in this step. The end state is taken here, inside the step: O.pause() makes
+    O.wait() return at once, while YADE's thread still completes the step (the engines after this
+    one, then iter and time advance), so whatever the main thread read of the simulation after
+    O.wait() would race with that thread. No runner of this script runs after this, not even later
+    in this step: the first reason to end the run is the one recorded."""
     state["status"], state["reason"] = status, reason
     state["end"] = end_state()
+    for engine in O.engines:
+        if isinstance(engine, PyRunner):
+            engine.dead = True
     O.pause()
 
 
@@ -223,8 +225,6 @@ def end_state():
 def watchdog():
     """Velocity bound, every few dozen steps. The kinetic energy (computed in C++) is a cheap
     pre-filter: it exceeds one sphere's energy at the speed bound whenever any sphere does."""
-    if state["status"] is not None:  # the run has ended in this step
-        return
     ke = utils.kineticEnergy()
     if not math.isfinite(ke):
         finish("blown", "non-finite kinetic energy at step %d" % O.iter)
@@ -255,8 +255,6 @@ def monitor():
     """Every monitor_every steps: peak overlap, spheres that rolled off the ends of the floor
     (removed: they would fall and accelerate for ever; the volume of those that had passed behind
     the blade stays counted as passed), and the volume passed under the blade."""
-    if state["status"] is not None:  # the run has ended in this step
-        return
     overlap = max([i.geom.penetrationDepth / R for i in O.interactions if i.isReal] or [0.0])
     state["peak_overlap_ratio"] = max(state["peak_overlap_ratio"], overlap)
     for by_phase, value in ((state["peak_overlap_by_phase"], overlap), (state["max_speed_by_phase"], max_speed())):
@@ -284,8 +282,6 @@ def start_phase(name):
 
 
 def control():
-    if state["status"] is not None:  # the run has ended in this step
-        return
     phase, elapsed = state["phase"], O.time - state["phase_start"]
     if phase == "settle":
         if (elapsed > 0.2 * P["settle_max_time"] and kinetic_energy_settled()) or elapsed > P["settle_max_time"]:
