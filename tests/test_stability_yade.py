@@ -86,6 +86,16 @@ def test_yade_script_refuses_a_step_above_critical(config, tmp_path):
     assert "REFUSED" in (tmp_path / "run.log").read_text()
 
 
+def test_too_dense_a_cloud_fails_with_the_config_key_to_change(config, tmp_path):
+    """makeCloud places fewer spheres than asked when the cloud is too dense: the case fails (no
+    raw result, so the workflow retries it once and records it) and its log names the key."""
+    cfg = {**config, "scene": {**config["scene"], "cloud_fraction": 0.6}}  # far above the schema's 0.35
+    params = case_params(cfg, {"f": 0.3, "d_um": 40.0, "h_um": 65.0, "v_mm_s": 10.0}, "smoke")
+    result, raw = run_scene(params, tmp_path)
+    assert result["outcome"] == "failed" and result["exit_code"] == 4 and raw == {}
+    assert "lower the config key scene.cloud_fraction" in (tmp_path / "run.log").read_text()
+
+
 def test_unsafe_forced_step_refused_before_anything_runs(config):
     cfg = with_preset(config, "forced", time_step_s=1e-6, density_scale=1)
     with pytest.raises(UnsafeTimeStep, match=r"presets\.forced\.time_step_s.*above the Rayleigh critical step"):

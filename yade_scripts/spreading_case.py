@@ -151,7 +151,8 @@ cloud = pack.SpherePack()
 placed = cloud.makeCloud((0, 0, 0), (L, W, P["cloud_height"]), rMean=R, rRelFuzz=0.0,
                          num=int(P["n_particles"]), seed=int(P["seed"]))
 if placed != int(P["n_particles"]):
-    log("FAILED: makeCloud placed %d of %d spheres in the cloud box; raise cloud_height" % (placed, P["n_particles"]))
+    log("FAILED: makeCloud placed %d of %d spheres in the cloud box (%.0f um high): the cloud is too dense; "
+        "lower the config key scene.cloud_fraction" % (placed, P["n_particles"], P["cloud_height"] * 1e6))
     sys.exit(EXIT_FAILED)
 sphere_ids = list(cloud.toSimulation(material=frict))
 
