@@ -1,6 +1,7 @@
 """The analysis half of the DAG on a small finished smoke run: convergence, surrogate, maps,
 case pictures, VTK, the HTML report, and the run-until-converged target."""
 import copy
+import hashlib
 import json
 import re
 
@@ -44,8 +45,11 @@ def test_main_job_writes_every_analysis_output(finished_run):
     assert {"lds", "lattice"} <= set(summary["sweeps"])
     ranking = (wf / "maps" / "sensitivity_ranking_table.csv").read_text()
     assert all(name in ranking for name in ("f", "d_um", "h_um", "v_mm_s"))
+    # the model says which table it was trained on, by content: the file's SHA-256
     meta = json.loads((wf / "surrogate" / "model.json").read_text())
-    assert meta["training_sha256"] if "training_sha256" in meta else meta
+    source = finished_run / meta["source_path"]
+    assert meta["source_sha256"] == hashlib.sha256(source.read_bytes()).hexdigest()
+    assert meta["n_train"] + meta["n_test"] == meta["n_usable"] > 0
     predictions = (wf / "surrogate" / "predictions.csv").read_text()
     assert "mfr_std" in predictions
 
