@@ -54,5 +54,7 @@ def summary_text(summary: dict) -> str:
     problems = {p["case_id"]: p for s in summary["sets"].values() for p in s["problems"]}
     if problems:
         lines.append("  cases failed or flagged (kept out of training):")
-        lines += [f"    {p['case_id']}: {p['status']}: {p['reason']}" for p in problems.values()]
+        # a case that did not finish has its status as the first of its flags: not said twice
+        lines += [f"    {p['case_id']}: {p['status']}: {p['reason'].removeprefix(p['status'] + ': ')}"
+                  for p in problems.values()]
     return "\n".join(lines) + "\n"
