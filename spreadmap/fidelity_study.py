@@ -22,7 +22,7 @@ import pandas as pd
 from scipy.stats import chi2 as chi2_dist
 
 from .design import TARGETS
-from .table import usable
+from .table import flagged, usable
 
 RESOLVED_SIGMAS = 2.0  # an error beyond this many standard errors is resolved
 
@@ -132,7 +132,7 @@ def preset_errors(table: pd.DataFrame, reference: str) -> tuple[pd.DataFrame, pd
                     "cost_ratio_to_reference": ref_cpu / cases["cpu_time"].sum(),
                     "particle_steps_per_s": (cases["n_particles"] * cases["steps"] / cases["cpu_time"]).median(),
                     "n_particles_median": cases["n_particles"].median(),
-                    "flagged_cases": int(cases["flagged"].fillna(False).astype(bool).sum()),
+                    "flagged_cases": int(flagged(cases).sum()),
                     "peak_overlap_max": cases["peak_overlap_ratio"].max()})
         rows.append(row)
     return per_point, pd.DataFrame(rows)

@@ -6,7 +6,7 @@ import math
 
 import pandas as pd
 
-from .table import usable
+from .table import flagged, usable
 
 
 def _num(x) -> float | None:
@@ -16,15 +16,15 @@ def _num(x) -> float | None:
 def set_summary(table: pd.DataFrame) -> dict:
     status = table["status"].value_counts().to_dict() if len(table) else {}
     ok = table[table["status"] == "ok"] if len(table) else table
-    flagged = table[table["flagged"].astype(bool)] if len(table) else table
-    problems = table[(table["status"] != "ok") | table["flagged"].astype(bool)] if len(table) else table
+    is_flagged = flagged(table)
+    problems = table[(table["status"] != "ok").to_numpy() | is_flagged] if len(table) else table
     wall = table["wall_time"].dropna() if "wall_time" in table else pd.Series(dtype=float)
     return {
         "cases": int(len(table)),
         "done": int(status.get("ok", 0)),
         "failed": int(len(table) - status.get("ok", 0)),
         "status_counts": {k: int(v) for k, v in status.items()},
-        "flagged": int(len(flagged)),
+        "flagged": int(is_flagged.sum()),
         "usable": int(usable(table).sum()),
         "regimes": {k: int(v) for k, v in ok["regime"].value_counts().items()} if len(ok) else {},
         "problems": [{"case_id": r.case_id, "status": r.status, "reason": r.flag_reason}

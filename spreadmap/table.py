@@ -14,14 +14,19 @@ FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "pr
                  "mfr", "pd", "regime", "flagged", "flag_reason"]
 
 
+def flagged(table: pd.DataFrame) -> np.ndarray:
+    """Rows flagged by a stability bound (none when the column is absent or empty)."""
+    if "flagged" not in table.columns:
+        return np.zeros(len(table), dtype=bool)
+    return table["flagged"].fillna(False).astype(bool).to_numpy()
+
+
 def usable(table: pd.DataFrame) -> np.ndarray:
     """Rows fit for statistics and training: finished (status ok) and not flagged by a stability
     bound. Columns that are absent impose nothing."""
-    ok = np.ones(len(table), dtype=bool)
+    ok = ~flagged(table)
     if "status" in table.columns:
         ok &= (table["status"] == "ok").to_numpy()
-    if "flagged" in table.columns:
-        ok &= ~table["flagged"].fillna(False).astype(bool).to_numpy()
     return ok
 
 
