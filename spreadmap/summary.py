@@ -38,7 +38,8 @@ def set_summary(table: pd.DataFrame) -> dict:
 
 def run_summary(tables: dict[str, pd.DataFrame]) -> dict:
     sets = {name: set_summary(t) for name, t in tables.items()}
-    unique = pd.concat([t for t in tables.values() if len(t)], ignore_index=True) if tables else pd.DataFrame()
+    filled = [t for t in tables.values() if len(t)]
+    unique = pd.concat(filled, ignore_index=True) if filled else pd.DataFrame()
     unique = unique.drop_duplicates("case_id") if len(unique) else unique
     return {"sets": sets, "unique_cases": int(len(unique)),
             "all": set_summary(unique) if len(unique) else set_summary(pd.DataFrame(columns=["status", "flagged"]))}

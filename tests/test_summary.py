@@ -18,3 +18,10 @@ def test_counts_and_reasons_said_once():
     assert "    c: failed: timed out after 2 s wall time\n" in text  # the status is not said twice
     assert "    b: ok: peak overlap 0.0517 R > 0.05 R\n" in text
     assert "a:" not in text
+
+
+def test_sets_without_cases():
+    empty = pd.DataFrame(columns=["case_id", "status", "flagged", "regime", "flag_reason"])
+    summary = run_summary({"points": empty})
+    assert summary["unique_cases"] == 0 and summary["sets"]["points"]["cases"] == 0
+    assert summary["all"]["cases"] == 0 and "points" in summary_text(summary)
