@@ -97,7 +97,8 @@ def case_row(job: dict, result: dict, raw: dict, config: dict) -> dict:
            "wall_time": result["wall_time"], "cpu_time": result["cpu_time"], "particle_steps_per_cpu_s": math.nan,
            "mfr": math.nan, "pd": math.nan, "regime": "", "workdir": job["workdir"]}
     if raw:
-        metrics = case_metrics({**raw, "cpu_time": result["cpu_time"]}, config["regime"], config["stability"])
+        metrics = case_metrics({**raw, "cpu_time": result["cpu_time"]}, config["regime"], config["stability"],
+                               config["metrics"])
         row.update(n_particles=metrics["n_particles"], steps=metrics["steps"], mfr=metrics["mfr"],
                    pd=metrics["pd"], regime=metrics["regime"])
         if not row["reason"]:

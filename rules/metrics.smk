@@ -1,5 +1,5 @@
 rule case_metrics:
-    """MFR, PD (exact sphere-box volumes), regime and stability flags of one case."""
+    """MFR, PD (exact volumes), layer quality, the case's noise estimate, regime and stability flags of one case."""
     input:
         raw="results/cases/{case}/raw.json",
     output:
@@ -7,6 +7,7 @@ rule case_metrics:
     params:
         regime=config["regime"],
         stability=config["stability"],
+        metrics=config["metrics"],
     log:
         "results/cases/{case}/metrics.log",
     localrule: True

@@ -5,6 +5,8 @@ rule run_summary:
     output:
         json="results/summary.json",
         text="results/summary.txt",
+    params:
+        regime=config["regime"],
     log:
         "logs/summary.log",
     localrule: True

@@ -1,4 +1,4 @@
-"""Snakemake entry: MFR, PD, regime and diagnostics of one case from its raw YADE output."""
+"""Snakemake entry: MFR, PD, layer quality, noise estimate, regime and diagnostics of one case from its raw YADE output."""
 import json
 
 from spreadmap.launcher import write_json_atomically
@@ -10,4 +10,4 @@ log_to(snakemake)  # noqa: F821
 sm = snakemake  # noqa: F821
 with open(sm.input.raw) as fh:
     raw = json.load(fh)
-write_json_atomically(sm.output.metrics, case_metrics(raw, sm.params.regime, sm.params.stability))
+write_json_atomically(sm.output.metrics, case_metrics(raw, sm.params.regime, sm.params.stability, sm.params.metrics))

@@ -11,7 +11,7 @@ log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 tables = {Path(p).stem: pd.read_csv(p) for p in sm.input.tables}
-summary = run_summary(tables)
+summary = run_summary(tables, sm.params.regime)
 Path(sm.output.json).write_text(json.dumps(summary, indent=1))
 text = summary_text(summary)
 Path(sm.output.text).write_text(text)

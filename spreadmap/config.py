@@ -97,10 +97,12 @@ def _check_cross_keys(config: dict) -> None:
 
     for problem in check_fidelity(config):
         raise ConfigError(problem)
+    clearance = (config.get("metrics") or {}).get("pd_clearance_d", 0.0)
     for name, preset in presets.items():
-        if preset["window_d"] < config["scene"]["blade_thickness_d"]:
+        if preset["window_d"] - clearance < config["scene"]["blade_thickness_d"]:
             raise ConfigError(f"config key 'presets.{name}.window_d': value {preset['window_d']} is not allowed; "
-                              f"the PD box spans the window and must be at least the blade thickness "
+                              f"the PD box spans the window less the clearance behind the blade "
+                              f"(metrics.pd_clearance_d = {clearance}) and must be at least the blade thickness "
                               f"(scene.blade_thickness_d = {config['scene']['blade_thickness_d']})")
 
 

@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["sphere_box_volume", "solid_fraction"]
+__all__ = ["sphere_box_volume", "solid_fraction", "cap_volume", "sphere_volume_below"]
 
 _FOUR_THIRDS_PI = 4.0 * np.pi / 3.0
 _CHUNK = 20_000  # spheres per block in the general (multi-face) path
@@ -230,3 +230,25 @@ def solid_fraction(centres, radii, box_min, box_max) -> float:
     vols = sphere_box_volume(centres, radii, box_min, box_max)
     box_vol = float(np.prod(np.asarray(box_max, float) - np.asarray(box_min, float)))
     return float(np.sum(vols)) / box_vol
+
+
+def cap_volume(height, radius) -> np.ndarray:
+    """Volume of a spherical cap of the given height (0 <= height <= 2 radius; clipped to that
+    range): pi h^2 (3 r - h) / 3. Arrays broadcast."""
+    r = np.asarray(radius, dtype=float)
+    h = np.clip(np.asarray(height, dtype=float), 0.0, 2.0 * r)
+    return np.pi * h * h * (3.0 * r - h) / 3.0
+
+
+def sphere_volume_below(coordinate, radii, plane) -> np.ndarray:
+    """Exact volume of the part of each sphere on the low side of an axis-aligned plane: the
+    spheres' centre coordinate along the plane's normal (n,), their radii (scalar or (n,)), the
+    plane's coordinate. A sphere wholly below gives its full volume, wholly above 0, a cut one
+    the spherical cap of height r + (plane - centre)."""
+    c = np.asarray(coordinate, dtype=float)
+    r = np.broadcast_to(np.asarray(radii, dtype=float), c.shape)
+    if np.any(r < 0) or not np.all(np.isfinite(r)):
+        raise ValueError("radii must be finite and non-negative")
+    if not np.all(np.isfinite(c)) or not np.isfinite(plane):
+        raise ValueError("centre coordinates and the plane must be finite")
+    return cap_volume(r + (plane - c), r)

@@ -1,11 +1,14 @@
 """The run summary: per set of cases, what is done, failed and flagged, with the reasons, the
-regimes, and the cost."""
+regimes (spreadmap.metrics.classify: from MFR, coverage and thickness; the table's labels are
+checked against the rule of the config given), and the cost."""
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pandas as pd
 
+from .metrics import classify
 from .table import flagged, usable
 
 
@@ -13,7 +16,25 @@ def _num(x) -> float | None:
     return None if x is None or (isinstance(x, float) and math.isnan(x)) else round(float(x), 3)
 
 
-def set_summary(table: pd.DataFrame) -> dict:
+def rule_text(rules: dict) -> str:
+    return (f"jamming if MFR < {rules['jam_mfr_max']:g}; else short feed if coverage < "
+            f"{rules['short_feed_coverage_min']:g} or thickness / h < {rules['short_feed_thickness_min']:g}; else normal")
+
+
+def stale_labels(ok: pd.DataFrame, rules: dict) -> int:
+    """Finished cases whose regime label differs from the rule applied to their MFR, coverage and
+    thickness (labels made by an older rule or other thresholds; a case without the layer columns
+    counts as stale)."""
+    if not len(ok):
+        return 0
+    if not {"coverage", "thickness_ratio"} <= set(ok.columns):
+        return int(len(ok))
+    now = classify(ok["mfr"].to_numpy(float), ok["coverage"].to_numpy(float), ok["thickness_ratio"].to_numpy(float),
+                   rules)
+    return int(np.sum(now != ok["regime"].fillna("").to_numpy(object)))
+
+
+def set_summary(table: pd.DataFrame, rules: dict | None = None) -> dict:
     status = table["status"].value_counts().to_dict() if len(table) else {}
     ok = table[table["status"] == "ok"] if len(table) else table
     is_flagged = flagged(table)
@@ -33,25 +54,35 @@ def set_summary(table: pd.DataFrame) -> dict:
                         "max": _num(wall.max()) if len(wall) else None,
                         "total": _num(wall.sum()) if len(wall) else None},
         "peak_memory_mb": _num(table["max_rss_mb"].max()) if "max_rss_mb" in table and len(table) else None,
+        **({"stale_regime_labels": stale_labels(ok, rules)} if rules is not None else {}),
     }
 
 
-def run_summary(tables: dict[str, pd.DataFrame]) -> dict:
-    sets = {name: set_summary(t) for name, t in tables.items()}
+def run_summary(tables: dict[str, pd.DataFrame], rules: dict | None = None) -> dict:
+    """Per set and over the distinct cases; with `rules` (the config's `regime`), the rule is said
+    and labels that differ from it are counted (stale_regime_labels)."""
+    sets = {name: set_summary(t, rules) for name, t in tables.items()}
     filled = [t for t in tables.values() if len(t)]
     unique = pd.concat(filled, ignore_index=True) if filled else pd.DataFrame()
     unique = unique.drop_duplicates("case_id") if len(unique) else unique
     return {"sets": sets, "unique_cases": int(len(unique)),
-            "all": set_summary(unique) if len(unique) else set_summary(pd.DataFrame(columns=["status", "flagged"]))}
+            **({"regime_rule": rule_text(rules)} if rules is not None else {}),
+            "all": set_summary(unique, rules) if len(unique)
+            else set_summary(pd.DataFrame(columns=["status", "flagged", "regime"]), rules)}
 
 
 def summary_text(summary: dict) -> str:
     lines = [f"spreadmap run summary: {summary['unique_cases']} distinct cases"]
+    if "regime_rule" in summary:
+        lines.append(f"  regime rule: {summary['regime_rule']}")
     for name, s in {**summary["sets"], "all (distinct)": summary["all"]}.items():
         w = s["wall_time_s"]
         lines.append(f"  {name:16s} {s['cases']:5d} cases: {s['done']} done, {s['failed']} failed, "
                      f"{s['flagged']} flagged, {s['usable']} usable; regimes {s['regimes']}; "
                      f"wall time per case median {w['median']} s, max {w['max']} s")
+        if s.get("stale_regime_labels"):
+            lines.append(f"  {'':16s} {s['stale_regime_labels']} finished cases carry a regime label that the rule "
+                         f"does not give (older metrics: re-run their case_metrics)")
     problems = {p["case_id"]: p for s in summary["sets"].values() for p in s["problems"]}
     if problems:
         lines.append("  cases failed or flagged (kept out of training):")

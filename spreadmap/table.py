@@ -1,5 +1,6 @@
 """The results table: one row per case (parameters, MFR, PD, regime, diagnostics, preset, wall
-time and peak memory from Snakemake's benchmark), and the run summary built from it."""
+time and peak memory from Snakemake's benchmark, then the case's noise estimate and its layer
+quality), and the run summary built from it."""
 from __future__ import annotations
 
 import json
@@ -9,9 +10,12 @@ import numpy as np
 import pandas as pd
 
 from .files import atomic_path
+from .metrics import NEW_COLUMNS
 
 FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
                  "mfr", "pd", "regime", "flagged", "flag_reason"]
+# after every other column (added later than the rest): noise estimate and layer quality
+LAST_COLUMNS = list(NEW_COLUMNS)
 
 
 def flagged(table: pd.DataFrame) -> np.ndarray:
@@ -51,7 +55,8 @@ def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFr
     table = pd.DataFrame(rows)
     if table.empty:
         return pd.DataFrame(columns=FIRST_COLUMNS)
-    return table[FIRST_COLUMNS + [c for c in table.columns if c not in FIRST_COLUMNS]]
+    last = [c for c in LAST_COLUMNS if c in table.columns]
+    return table[FIRST_COLUMNS + [c for c in table.columns if c not in FIRST_COLUMNS + last] + last]
 
 
 def write_table(table: pd.DataFrame, path: Path | str) -> None:

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from spreadmap.geometry import _general_volume, solid_fraction, sphere_box_volume
+from spreadmap.geometry import _general_volume, cap_volume, solid_fraction, sphere_box_volume, sphere_volume_below
 
 BALL = 4.0 * np.pi / 3.0
 
@@ -418,3 +418,42 @@ def test_malformed_input_raises(centres, radii, lo, hi, match):
         sphere_box_volume(centres, radii, lo, hi)
     with pytest.raises(ValueError, match=match):
         solid_fraction(centres, radii, lo, hi)
+
+
+# --------------------------------------------------------------------------------------------
+# Caps and the part of a sphere below a plane (MFR across the blade's plane)
+# --------------------------------------------------------------------------------------------
+def test_cap_volume_textbook_values():
+    r = 1.7
+    assert cap_volume(0.0, r) == 0.0
+    assert cap_volume(r, r) == pytest.approx(0.5 * ball(r), rel=1e-15)  # hemisphere
+    assert cap_volume(2 * r, r) == pytest.approx(ball(r), rel=1e-15)
+    # a cap of height h as the slab of the ball between r - h and r (independent formula)
+    for h in (0.1, 0.9, 2.5):
+        assert cap_volume(h, r) == pytest.approx(slab(r, r - h, r), rel=1e-13)
+    # heights beyond [0, 2r] are clipped
+    np.testing.assert_allclose(cap_volume([-1.0, 5.0], r), [0.0, ball(r)], rtol=1e-15)
+
+
+def test_sphere_volume_below_a_plane_against_slabs_and_monte_carlo():
+    rng = np.random.default_rng(5)
+    centres = np.array([-3.0, -0.5, 0.0, 0.3, 0.99, 2.0])
+    radii = np.array([1.0, 1.0, 0.7, 0.8, 1.0, 1.5])
+    got = sphere_volume_below(centres, radii, 0.0)
+    expected = [ball(1.0), slab(1.0, -1.0, 0.5), 0.5 * ball(0.7), slab(0.8, -0.8, -0.3), slab(1.0, -1.0, -0.99), 0.0]
+    np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-15)
+    # Monte Carlo: points uniform in the ball, share with x below the plane
+    n = 400_000
+    p = rng.normal(size=(n, 3))
+    p *= (rng.uniform(size=n) ** (1 / 3) / np.linalg.norm(p, axis=1))[:, None]
+    for c in (-0.6, 0.25):
+        share = np.mean(c + p[:, 0] < 0.0)
+        se = np.sqrt(share * (1 - share) / n)
+        assert abs(sphere_volume_below([c], 1.0, 0.0)[0] / ball(1.0) - share) < 4 * se
+
+
+def test_sphere_volume_below_refuses_bad_input():
+    with pytest.raises(ValueError, match="non-negative"):
+        sphere_volume_below([0.0], -1.0, 0.0)
+    with pytest.raises(ValueError, match="finite"):
+        sphere_volume_below([np.nan], 1.0, 0.0)

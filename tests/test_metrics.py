@@ -1,13 +1,24 @@
-"""MFR, PD and regime on synthetic data with known answers (no YADE)."""
+"""MFR, PD, the case's noise estimate, the regime and case_metrics on synthetic data with known
+answers (no YADE). Layer quality itself: tests/test_layer.py."""
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
-from spreadmap.metrics import PHASES, case_metrics, classify, layer_density, mass_flow_ratio, passed_volume
+from spreadmap.metrics import (NEW_COLUMNS, PHASES, batch_means_sd, case_metrics, classify, counting_constant,
+                               counting_sd, layer_density, mass_flow_ratio, measured_span, passed_volume,
+                               pooled_constant)
 
 D = 1.0  # work in units of the diameter
 R = 0.5 * D
+BALL = math.pi / 6 * D ** 3
+
+
+def slab(r, z1, z2):
+    """Volume of the ball (centre 0, radius r) between z1 and z2 (textbook: pi (r^2 z - z^3/3))."""
+    prim = lambda z: math.pi * (r * r * z - z ** 3 / 3.0)  # noqa: E731
+    return prim(z2) - prim(z1)
 
 
 def cubic_layer(x0, x1, width, layers, spacing=D):
@@ -18,11 +29,12 @@ def cubic_layer(x0, x1, width, layers, spacing=D):
     return np.array([(x, y, z) for x in xs for y in ys for z in zs])
 
 
-def snapshot(positions, blade_rear_x, removed=0.0):
-    return {"positions": positions.tolist(), "radii": [R] * len(positions), "blade_rear_x": blade_rear_x,
-            "removed_behind_volume": removed}
+def snapshot(positions, blade_rear_x, removed=0.0, radius=R):
+    return {"positions": np.asarray(positions).tolist(), "radii": [radius] * len(positions),
+            "blade_rear_x": blade_rear_x, "removed_behind_volume": removed}
 
 
+# ------------------------------------------------------------------------------------------ MFR
 def test_mfr_of_a_known_trajectory():
     """A blade leaving behind a simple cubic monolayer (solid fraction pi/6 in a layer of one
     diameter) moves 10 D during the window, with a gap of 2 D: the flow is (pi/6) * (1/2)."""
@@ -30,6 +42,45 @@ def test_mfr_of_a_known_trajectory():
     start = snapshot(cubic_layer(0.0, 5.0, width, 1), blade_rear_x=5.0)
     end = snapshot(cubic_layer(0.0, 15.0, width, 1), blade_rear_x=15.0)
     assert mass_flow_ratio(start, end, gap, width) == pytest.approx(math.pi / 6 / 2, rel=1e-12)
+
+
+def test_passed_volume_counts_the_part_of_each_sphere_behind_the_plane():
+    """Spheres cut by the blade's rear plane count by their exact part behind it (textbook slabs),
+    not by their centre: a centre on the plane is half a sphere."""
+    pos = [[2.0, 0.5, 0.5], [2.3, 0.5, 1.5], [1.9, 1.5, 0.5], [0.0, 1.5, 1.5], [3.0, 2.5, 0.5]]
+    got = passed_volume(snapshot(pos, blade_rear_x=2.0, removed=7.0))
+    expected = 7.0 + 0.5 * BALL + slab(R, -R, -0.3) + slab(R, -R, 0.1) + BALL + 0.0
+    assert got == pytest.approx(expected, rel=1e-13)
+
+
+def test_passed_volume_against_monte_carlo():
+    rng = np.random.default_rng(3)
+    centres = rng.uniform((0, 0, 0), (4, 3, 2), size=(60, 3))
+    plane = 2.17
+    got = passed_volume(snapshot(centres, blade_rear_x=plane))
+    # points uniform in each ball; the share with x < plane, times the ball's volume
+    n = 20_000
+    u = rng.normal(size=(len(centres), n, 3))
+    u *= (rng.uniform(size=(len(centres), n, 1)) ** (1 / 3) / np.linalg.norm(u, axis=2, keepdims=True)) * R
+    share = np.mean(centres[:, None, 0] + u[..., 0] < plane, axis=1)
+    estimate = BALL * share.sum()
+    se = BALL * math.sqrt(np.sum(share * (1 - share) / n))
+    assert abs(got - estimate) < 4 * se
+
+
+def test_mfr_with_the_plane_cutting_spheres_differs_from_a_centre_count():
+    """Blade rear at x = 5.3 then 15.1 over a long square monolayer (4 spheres a column): behind
+    the plane are the whole columns and the part of the cut column (independent slabs); a
+    centre count would say 10 columns."""
+    width, gap = 4.0, 1.0
+    layer = cubic_layer(0.0, 30.0, width, 1)
+    start, end = snapshot(layer, 5.3), snapshot(layer, 15.1)
+    behind_end = 4 * (15 * BALL + slab(R, -R, -0.4))  # columns 0.5..14.5 whole, 15.5 cut at -0.4
+    behind_start = 4 * (5 * BALL + slab(R, -R, -0.2))  # columns 0.5..4.5 whole, 5.5 cut at -0.2
+    passed = behind_end - behind_start
+    assert mass_flow_ratio(start, end, gap, width) == pytest.approx(passed / (gap * width * 9.8), rel=1e-12)
+    by_centre = 4 * 10 * BALL / (gap * width * 9.8)  # centres 5.5 .. 14.5 crossed
+    assert abs(mass_flow_ratio(start, end, gap, width) - by_centre) > 1e-3
 
 
 def test_mfr_counts_spheres_removed_behind_the_blade():
@@ -49,6 +100,7 @@ def test_mfr_refuses_a_blade_that_did_not_move():
         mass_flow_ratio(s, s, 1.0, 2.0)
 
 
+# ------------------------------------------------------------------------------------------- PD
 def test_pd_of_a_simple_cubic_bed_is_pi_over_6():
     """Two full cubic layers in a box of height 2 D: pi/6 exactly; a box cutting through the
     upper layer at mid-height also gives pi/6 (exact sphere-box volumes, not centre counts)."""
@@ -61,58 +113,230 @@ def test_pd_of_a_simple_cubic_bed_is_pi_over_6():
 
 def test_pd_of_a_half_covered_floor():
     pos = cubic_layer(0.0, 4.0, 4.0, 1)  # spheres only over the first half of an 8 D box
-    pd = layer_density(pos, np.full(len(pos), R), 0.0, 8.0, 4.0, 1.0, slices=2)
-    np.testing.assert_allclose(pd, [math.pi / 6, 0.0], atol=1e-12)
+    pd_ = layer_density(pos, np.full(len(pos), R), 0.0, 8.0, 4.0, 1.0, slices=2)
+    np.testing.assert_allclose(pd_, [math.pi / 6, 0.0], atol=1e-12)
 
 
-@pytest.mark.parametrize("mfr,pd,cv,expected", [
-    (0.01, 0.01, 0.1, "jamming"), (0.3, 0.1, 0.1, "short_feed"), (0.3, 0.3, 0.6, "short_feed"),
-    (0.3, 0.3, 0.1, "normal"),
+def test_measured_span_ends_a_clearance_behind_the_blade_and_refuses_a_short_box():
+    start, end = {"blade_rear_x": 10.0}, {"blade_rear_x": 16.0}
+    assert measured_span(start, end, 1.0, 2.0) == (10.0, 15.0)
+    assert measured_span(start, end, 4.0, 2.0) == (10.0, 12.0)  # exactly the blade thickness
+    with pytest.raises(ValueError, match=r"metrics.pd_clearance_d.*4.5 d.*1.5 d long.*blade thickness 2 d"):
+        measured_span(start, end, 4.5, 2.0, diameter=1.0)
+
+
+# ---------------------------------------------------------------------------------------- noise
+def test_counting_sd():
+    assert counting_sd(0.3, 36.0, 0.45) == pytest.approx(0.45 / 6 * 0.3, rel=1e-15)
+    assert counting_sd(0.3, 0.0, 0.45) == math.inf and math.isnan(counting_sd(math.nan, 5.0, 0.45))
+
+
+def poisson_series(rng, rate, x0, x1, step, vol=1.0):
+    """[time, x, volume] every `step` of blade travel: spheres crossing as a Poisson process of
+    `rate` per unit travel, counted whole (by centre) like the scene's series."""
+    xs = np.arange(x0, x1 + 1e-9, step)
+    crossings = np.sort(rng.uniform(x0 - 5, x1, rng.poisson(rate * (x1 - x0 + 5))))
+    counts = np.searchsorted(crossings, xs)
+    return np.column_stack([xs, xs, vol * counts])
+
+
+def test_batch_means_sd_of_a_poisson_flow():
+    """Independent crossings at rate k per unit travel: the window's MFR has SD
+    sqrt(k L) / (h W L) (volume 1 per sphere); the batch-means variance is unbiased for it."""
+    rng = np.random.default_rng(1)
+    k, x0, x1, gap, width = 6.0, 10.0, 20.0, 1.0, 2.0
+    truth = math.sqrt(k * (x1 - x0)) / (gap * width * (x1 - x0))
+    est = []
+    for _ in range(400):
+        sd, used = batch_means_sd(poisson_series(rng, k, x0, x1, 0.05).tolist(), x0, x1, gap, width, 8)
+        assert used == 8
+        est.append(sd ** 2)
+    # each estimate has chi-square(7) / 7 spread (relative SD 0.53): the mean of 400 within 4 SE
+    assert np.mean(est) == pytest.approx(truth ** 2, rel=4 * 0.53 / 20)
+
+
+def test_batch_means_needs_two_monitor_intervals_per_batch():
+    rng = np.random.default_rng(2)
+    series = poisson_series(rng, 5.0, 0.0, 10.0, 1.0).tolist()  # 10 intervals in the window
+    assert batch_means_sd(series, 0.0, 10.0, 1.0, 1.0, 8)[1] == 5
+    assert batch_means_sd(series[:4], 0.0, 10.0, 1.0, 1.0, 8) == (pytest.approx(math.nan, nan_ok=True), 0)
+    assert math.isnan(batch_means_sd([], 0.0, 10.0, 1.0, 1.0, 8)[0])
+
+
+PRESETS = {"a": {"width_d": 5, "window_d": 8}, "b": {"width_d": 8, "window_d": 12}}
+POINTS = {"p1": (30.0, 65.0, 0.31), "p2": (50.0, 55.0, 0.20)}
+
+
+def seed_table(rng, c, seeds=8):
+    rows = []
+    for preset, geo in PRESETS.items():
+        for name, (d, h, m) in POINTS.items():
+            n = m * h * geo["width_d"] * d * geo["window_d"] * d / (math.pi * d ** 3 / 6)
+            for s in range(seeds):
+                rows.append({"preset": preset, "name": name, "f": 0.3, "d_um": d, "h_um": h, "v_mm_s": 10.0,
+                             "seed": s, "status": "ok", "flagged": False,
+                             "mfr": m * (1 + c / math.sqrt(n) * rng.normal()),
+                             "pd": m * (1 + c / math.sqrt(n) * rng.normal())})
+    return pd.DataFrame(rows)
+
+
+def test_counting_constant_recovers_c_and_its_intervals_cover():
+    """Seeds drawn with relative SD c / sqrt(N), N from the geometry: c recovered, and the 90 %
+    intervals (per cell and pooled) cover the true c about 90 % of the time."""
+    rng = np.random.default_rng(4)
+    c = 0.45
+    cell_hits, pooled_hits, pooled = [], [], []
+    for _ in range(150):
+        cells = counting_constant(seed_table(rng, c), PRESETS)
+        assert len(cells) == 4 and (cells["seeds"] == 8).all()
+        cell_hits += list((cells["c_mfr_lo"] <= c) & (c <= cells["c_mfr_hi"]))
+        est, lo, hi = pooled_constant(cells, "mfr")
+        pooled_hits.append(lo <= c <= hi)
+        pooled.append(est)
+    assert np.mean(pooled) == pytest.approx(c, rel=0.03)
+    # 600 and 150 Bernoulli(0.9): 4 SD = 0.049 and 0.098
+    assert abs(np.mean(cell_hits) - 0.9) < 0.05 and abs(np.mean(pooled_hits) - 0.9) < 0.1
+
+
+def test_counting_constant_leaves_out_failed_and_flagged_cases():
+    table = seed_table(np.random.default_rng(5), 0.45)
+    table.loc[0, "status"], table.loc[1, "flagged"] = "blown", True
+    table.loc[0, "mfr"] = table.loc[1, "mfr"] = 99.0  # would show in the means if counted
+    cells = counting_constant(table, PRESETS)
+    assert cells["seeds"].tolist() == [6, 8, 8, 8] and cells["mfr_mean"].max() < 1.0
+
+
+# --------------------------------------------------------------------------------------- regime
+RULES = {"jam_mfr_max": 0.05, "short_feed_coverage_min": 0.5, "short_feed_thickness_min": 0.25}
+
+
+@pytest.mark.parametrize("mfr,coverage,thickness,expected", [
+    (0.01, 0.9, 0.6, "jamming"), (0.01, 0.1, 0.1, "jamming"), (0.3, 0.4, 0.6, "short_feed"),
+    (0.3, 0.9, 0.2, "short_feed"), (0.3, 0.9, 0.6, "normal"), (0.3, 0.5, 0.25, "normal"), (math.nan, 0.9, 0.6, ""),
 ])
-def test_regime_rules(mfr, pd, cv, expected):
-    rules = {"jam_mfr_max": 0.05, "short_feed_pd_min": 0.2, "short_feed_cv_max": 0.35}
-    assert classify(mfr, pd, cv, rules) == expected
+def test_regime_rules(mfr, coverage, thickness, expected):
+    assert classify(mfr, coverage, thickness, RULES) == expected
 
 
-def raw_record(status="ok", overlap=0.001, escaped=0, layers=1):
-    d = 30e-6
-    scale = d  # positions of the synthetic layer in metres
-    end = cubic_layer(0.0, 20.0, 4.0, layers) * scale
-    start = end[end[:, 0] < 10.0 * scale]
+def test_classify_is_vectorised_and_broadcasts():
+    got = classify(np.array([0.01, 0.3, 0.3, 0.3]), np.array([0.9, 0.4, 0.9, 0.9]), 0.6, RULES)
+    assert got.dtype == object and got.tolist() == ["jamming", "short_feed", "normal", "normal"]
+    grid = classify(np.linspace(0, 0.4, 5)[:, None], np.linspace(0, 1, 3)[None, :], 0.6, RULES)
+    assert grid.shape == (5, 3) and grid[0, 2] == "jamming" and grid[4, 0] == "short_feed" and grid[4, 2] == "normal"
+    with pytest.raises(KeyError, match="short_feed_coverage_min"):
+        classify(0.3, 0.9, 0.6, {"jam_mfr_max": 0.05, "short_feed_pd_min": 0.2})
+
+
+# ---------------------------------------------------------------------------------- case_metrics
+SETTINGS = {"pd_clearance_d": 1.0, "pd_slices": 4, "counting_noise_c": 0.45, "within_batches": 8,
+            "surface_grid_d": 0.01}
+BOUNDS = {"max_overlap_ratio": 0.05, "max_escaped": 0}
+DIAM = 30e-6
+
+
+def raw_record(status="ok", overlap=0.001, escaped=0, layers=1, row_only=False):
+    """A blade at 10 d then 20 d (gap 2 d, bed 4 d wide) over a simple cubic deposit (or a
+    single row of spheres along the middle of the bed), in metres."""
+    d = DIAM
+    layer = cubic_layer(0.0, 20.0, 4.0, layers)
+    if row_only:
+        layer = layer[np.isclose(layer[:, 1], 1.5) & np.isclose(layer[:, 2], 0.5)]
+    end = layer * d
+    start = end[end[:, 0] < 10.0 * d]
     params = {"case_id": "x", "preset": "smoke", "point": {"f": 0.3, "d_um": 30.0, "h_um": 60.0, "v_mm_s": 10.0},
-              "seed": 1, "diameter": d, "gap": 2 * d, "width": 4 * d, "time_step": 1e-7,
+              "seed": 1, "diameter": d, "gap": 2 * d, "width": 4 * d, "blade_thickness": 2 * d, "time_step": 1e-7,
               "critical_time_step": 4e-7, "density_scale": 1000.0, "n_particles": len(end)}
     raw = {"status": status, "reason": "" if status == "ok" else "a sphere reached 9 m/s", "params": params,
            "peak_overlap_ratio": overlap, "escaped_particles": escaped, "final_kinetic_energy": 1.0,
            "kinetic_energy_scale": 10.0}
     if status == "ok":
-        raw["snapshots"] = {"window_start": {**snapshot(start, 10.0 * scale), "radii": [0.5 * d] * len(start)},
-                            "window_end": {**snapshot(end, 20.0 * scale), "radii": [0.5 * d] * len(end)}}
+        raw["snapshots"] = {"window_start": snapshot(start, 10.0 * d, radius=0.5 * d),
+                            "window_end": snapshot(end, 20.0 * d, radius=0.5 * d)}
     return raw
 
 
-RULES = {"jam_mfr_max": 0.05, "short_feed_pd_min": 0.2, "short_feed_cv_max": 0.35, "pd_slices": 4}
-BOUNDS = {"max_overlap_ratio": 0.05, "max_escaped": 0}
-
-
-def test_case_metrics_of_a_clean_case():
-    m = case_metrics(raw_record(layers=2), RULES, BOUNDS)
+def test_case_metrics_of_a_clean_two_layer_case():
+    """Two simple cubic layers: MFR = PD = pi/6 (gap 2 d); 10 columns of 8 spheres passed; the
+    measured layer (10 d to 19 d) has the hand values of tests/test_layer.py: coverage pi/4,
+    packing 8/11, mean thickness 11 pi d / 24 over a gap of 2 d."""
+    m = case_metrics(raw_record(layers=2), RULES, BOUNDS, SETTINGS)
     assert m["mfr"] == pytest.approx(math.pi / 6) and m["pd"] == pytest.approx(math.pi / 6)
     assert m["regime"] == "normal" and not m["flagged"] and m["time_step_ratio"] == 0.25
     assert m["d_um"] == 30.0 and m["final_ke_per_mgd"] == 0.1
+    assert m["n_passed"] == pytest.approx(80.0, rel=1e-12)
+    assert m["n_pd"] == pytest.approx(72.0, rel=1e-12)  # box 9 d x 4 d x 2 d at pi/6: 72 spheres' worth
+    assert m["mfr_sd"] == pytest.approx(0.45 / math.sqrt(80) * math.pi / 6, rel=1e-12)
+    assert m["pd_sd"] == pytest.approx(0.45 / math.sqrt(72) * math.pi / 6, rel=1e-12)
+    assert m["coverage"] == pytest.approx(math.pi / 4, rel=2e-3)
+    assert m["layer_packing"] == pytest.approx(8 / 11, rel=2e-3)
+    assert m["thickness_ratio"] == pytest.approx(11 * math.pi / 24 / 2, rel=2e-3)
+    assert math.isnan(m["mfr_sd_within"])  # no behind_series in this record
+    assert list(m)[-len(NEW_COLUMNS):] == list(NEW_COLUMNS)  # the new columns come last
+
+
+def test_pd_box_ends_a_clearance_behind_the_blade():
+    """A dense blob still in the gap region just behind the blade (within the clearance) does not
+    enter PD or the layer measures."""
+    raw = raw_record(layers=1)
+    end = raw["snapshots"]["window_end"]
+    blob = np.array([[19.5, y, 1.5] for y in (0.5, 1.5, 2.5, 3.5)]) * DIAM  # a second layer at 19-20 d
+    end["positions"] += blob.tolist()
+    end["radii"] += [0.5 * DIAM] * len(blob)
+    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    assert m["pd"] == pytest.approx(math.pi / 12, rel=1e-12)  # one layer in a box 2 d high
+    with_blob = case_metrics(raw, RULES, BOUNDS, {**SETTINGS, "pd_clearance_d": 0.0})
+    assert with_blob["pd"] > m["pd"] * 1.05
+    with pytest.raises(ValueError, match="metrics.pd_clearance_d"):
+        case_metrics(raw, RULES, BOUNDS, {**SETTINGS, "pd_clearance_d": 8.5})
+
+
+def test_a_patchy_deposit_is_short_feed_whatever_its_flow():
+    """A single row of spheres along a 4 d wide bed: coverage pi/16 < 0.5 -> short feed."""
+    m = case_metrics(raw_record(row_only=True), RULES, BOUNDS, SETTINGS)
+    assert m["coverage"] == pytest.approx(math.pi / 16, rel=2e-3) and m["regime"] == "short_feed"
+    assert m["n_passed"] == pytest.approx(10.0, rel=1e-12)
+
+
+def test_substrate_spheres_are_not_powder():
+    raw = raw_record(layers=1)
+    for snap in raw["snapshots"].values():
+        n = len(snap["positions"])
+        snap["positions"] += [[x * DIAM, 2 * DIAM, -0.5 * DIAM] for x in range(25)]  # fixed layer below z = 0
+        snap["radii"] += [0.5 * DIAM] * 25
+        snap["substrate"] = [False] * n + [True] * 25
+    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    assert m["mfr"] == pytest.approx(math.pi / 6 / 2) and m["n_passed"] == pytest.approx(40.0)
+
+
+def test_within_case_noise_from_the_behind_series():
+    raw = raw_record(layers=1)
+    rng = np.random.default_rng(8)
+    series = poisson_series(rng, 4.0, 9.0, 20.0, 0.1, vol=BALL * DIAM ** 3)
+    series[:, 1] *= DIAM
+    raw["behind_series"] = series.tolist()
+    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    expected = batch_means_sd(series.tolist(), 10 * DIAM, 20 * DIAM, 2 * DIAM, 4 * DIAM, 8)[0]
+    assert m["mfr_sd_within"] == expected and 0 < expected < 1
+
+
+def test_case_metrics_names_a_missing_setting():
+    with pytest.raises(KeyError, match="metrics.*surface_grid_d"):
+        case_metrics(raw_record(), RULES, BOUNDS, {k: v for k, v in SETTINGS.items() if k != "surface_grid_d"})
 
 
 @pytest.mark.parametrize("kind,expected", [
     ({"overlap": 0.2}, "peak overlap"), ({"escaped": 3}, "3 spheres escaped"), ({"status": "blown"}, "blown: a sphere"),
 ])
 def test_a_broken_stability_bound_flags_the_case(kind, expected):
-    m = case_metrics(raw_record(**kind), RULES, BOUNDS)
+    m = case_metrics(raw_record(**kind), RULES, BOUNDS, SETTINGS)
     assert m["flagged"] and expected in m["flag_reason"]
+    if kind.get("status") == "blown":
+        assert all(math.isnan(m[k]) for k in NEW_COLUMNS) and m["regime"] == ""
 
 
 def test_peak_overlap_by_phase_columns():
     raw = raw_record(overlap=0.03)
-    assert all(math.isnan(case_metrics(raw, RULES, BOUNDS)[f"peak_overlap_{p}"]) for p in PHASES)  # older records
+    assert all(math.isnan(case_metrics(raw, RULES, BOUNDS, SETTINGS)[f"peak_overlap_{p}"]) for p in PHASES)
     raw["peak_overlap_by_phase"] = {"settle": 0.03, "relax": 0.004, "move": 0.01}
-    m = case_metrics(raw, RULES, BOUNDS)
+    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
     assert [m[f"peak_overlap_{p}"] for p in PHASES] == [0.03, 0.004, 0.01]

@@ -39,7 +39,7 @@ def test_rerun_by_hand_reproduces_the_recorded_result(config, tmp_path):
     subprocess.run([yade_executable(), "-n", "-j1", "-x", str(tmp_path / "case.py"), str(by_hand)],
                    env=clean_environment(), check=True, capture_output=True, timeout=300)
     again = json.loads(by_hand.read_text())
-    first, second = (case_metrics(r, config["regime"], config["stability"]) for r in (raw, again))
+    first, second = (case_metrics(r, config["regime"], config["stability"], config["metrics"]) for r in (raw, again))
     assert (first["mfr"], first["pd"], first["steps"]) == (second["mfr"], second["pd"], second["steps"])
     assert raw["snapshots"]["window_end"]["positions"] == again["snapshots"]["window_end"]["positions"]
 

@@ -37,7 +37,7 @@ def corner_runs(config, tmp_path_factory):
 def test_corner_case_is_stable(corner_runs, config, name):
     params, result, raw = corner_runs[name]
     assert result["outcome"] == "ok", (result, raw.get("reason"))
-    m = case_metrics(raw, config["regime"], config["stability"])
+    m = case_metrics(raw, config["regime"], config["stability"], config["metrics"])
     print(name, {k: m[k] for k in ("mfr", "pd", "regime", "n_particles", "steps", "wall_time",
                                    "peak_overlap_ratio", "max_speed", "final_ke_per_mgd", "rolled_off_particles")})
     assert m["time_step_ratio"] == pytest.approx(config["presets"]["smoke"]["dt_factor"])
@@ -63,7 +63,7 @@ def test_watchdog_stops_a_run_within_seconds(config, tmp_path):
     assert result["outcome"] == "blown" and result["exit_code"] == 3
     assert time.time() - start < 30
     assert raw["status"] == "blown" and "max_speed" in raw["reason"]
-    m = case_metrics(raw, config["regime"], config["stability"])
+    m = case_metrics(raw, config["regime"], config["stability"], config["metrics"])
     assert m["flagged"] and math.isnan(m["mfr"]) and m["regime"] == ""
 
 
@@ -130,7 +130,7 @@ def test_rolling_resistance_option_runs_and_stops_rolling(config, tmp_path):
         workdir.mkdir()
         result, raw = run_scene(params, workdir)
         assert result["outcome"] == "ok", result
-        runs[enabled] = case_metrics(raw, config["regime"], config["stability"])
+        runs[enabled] = case_metrics(raw, config["regime"], config["stability"], config["metrics"])
     print({k: {m: runs[k][m] for m in ("mfr", "pd", "final_ke_per_mgd", "rolled_off_particles")} for k in runs})
     assert not runs[True]["flagged"]
     assert runs[True]["final_ke_per_mgd"] < runs[False]["final_ke_per_mgd"]

@@ -25,3 +25,22 @@ def test_sets_without_cases():
     summary = run_summary({"points": empty})
     assert summary["unique_cases"] == 0 and summary["sets"]["points"]["cases"] == 0
     assert summary["all"]["cases"] == 0 and "points" in summary_text(summary)
+
+
+def test_regime_rule_stated_and_stale_labels_counted():
+    """With the config's rule, the summary says it and counts labels the rule would not give."""
+    rules = {"jam_mfr_max": 0.05, "short_feed_coverage_min": 0.5, "short_feed_thickness_min": 0.25}
+    table = pd.DataFrame({
+        "case_id": ["a", "b", "c", "d"], "status": ["ok", "ok", "ok", "failed"],
+        "regime": ["normal", "short_feed", "normal", ""], "flagged": [False, False, False, True],
+        "flag_reason": ["", "", "", "failed: x"], "mfr": [0.3, 0.3, 0.01, float("nan")],
+        "coverage": [0.9, 0.3, 0.9, float("nan")], "thickness_ratio": [0.5, 0.5, 0.5, float("nan")],
+    })
+    summary = run_summary({"lds": table}, rules)
+    assert summary["sets"]["lds"]["stale_regime_labels"] == 1  # c: MFR 0.01 is jamming by the rule
+    assert summary["sets"]["lds"]["regimes"] == {"normal": 2, "short_feed": 1}
+    text = summary_text(summary)
+    assert "regime rule: jamming if MFR < 0.05; else short feed if coverage < 0.5" in text
+    assert "1 finished cases carry a regime label that the rule does not give" in text
+    old = table.drop(columns=["coverage", "thickness_ratio"])  # metrics from before the layer columns
+    assert run_summary({"lds": old}, rules)["sets"]["lds"]["stale_regime_labels"] == 3

@@ -1,0 +1,128 @@
+"""Reduce one case's raw YADE output to the row of the results table: MFR and PD (the study's
+axes, .flow), the layer's quality (.layer), the case's own noise estimate (.noise), the regime
+(.regime) and the diagnostics, with the stability flags."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..scene import DENSEST_PACKING
+from .flow import layer_density, mass_flow_ratio, measured_span, sphere_volume, window_passed_volume
+from .layer import layer_quality
+from .noise import batch_means_sd, counting_sd
+from .regime import classify
+
+PHASES = ("settle", "relax", "move")  # the phases of the scene, in order (yade_scripts/spreading_case.py)
+
+# columns added by the layer / precision work (issues 13, 14), after every older column
+NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_packing", "coverage",
+               "roughness_d", "thickness_ratio")
+SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batches", "surface_grid_d")
+
+
+def powder(snapshot: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (n, 3) and radii (n,) of the powder spheres of a snapshot (a fixed substrate's
+    spheres, if the snapshot marks them in a boolean list `substrate`, are left out)."""
+    pos = np.asarray(snapshot["positions"], float).reshape(-1, 3)
+    rad = np.asarray(snapshot["radii"], float)
+    if "substrate" in snapshot:
+        keep = ~np.asarray(snapshot["substrate"], bool)
+        pos, rad = pos[keep], rad[keep]
+    return pos, rad
+
+
+def _powder_snapshot(snapshot: dict) -> dict:
+    pos, rad = powder(snapshot)
+    return {**snapshot, "positions": pos, "radii": rad}
+
+
+def check_settings(settings: dict) -> None:
+    missing = [k for k in SETTING_KEYS if k not in settings]
+    if missing:
+        raise KeyError(f"config section 'metrics' lacks {missing} (needed: {list(SETTING_KEYS)})")
+
+
+def measure(raw: dict, settings: dict) -> dict:
+    """MFR, PD and its slice CV, the layer measures and the noise estimates of a finished case."""
+    check_settings(settings)
+    p = raw["params"]
+    d, gap, width = p["diameter"], p["gap"], p["width"]
+    s1 = _powder_snapshot(raw["snapshots"]["window_start"])
+    s2 = _powder_snapshot(raw["snapshots"]["window_end"])
+    v_sphere = sphere_volume(d)
+    x0, x1 = measured_span(s1, s2, settings["pd_clearance_d"] * d, p["blade_thickness"], diameter=d)
+    out = {"mfr": mass_flow_ratio(s1, s2, gap, width)}
+    slices = layer_density(s2["positions"], s2["radii"], x0, x1, width, gap, settings["pd_slices"])
+    out["pd"] = float(np.mean(slices))  # equal slices: the mean is the whole box's fraction
+    out["pd_cv"] = float(np.std(slices) / out["pd"]) if out["pd"] > 0 else math.inf
+    c = settings["counting_noise_c"]
+    out["n_passed"] = window_passed_volume(s1, s2) / v_sphere
+    out["n_pd"] = out["pd"] * (x1 - x0) * width * gap / v_sphere
+    out["mfr_sd"] = counting_sd(out["mfr"], out["n_passed"], c)
+    out["pd_sd"] = counting_sd(out["pd"], out["n_pd"], c)
+    out["mfr_sd_within"] = batch_means_sd(raw.get("behind_series", []), s1["blade_rear_x"], s2["blade_rear_x"],
+                                          gap, width, settings["within_batches"])[0]
+    layer = layer_quality(s2["positions"], s2["radii"], x0, x1, width, settings["surface_grid_d"] * d)
+    out["layer_packing"] = layer["layer_packing"]
+    out["coverage"] = layer["coverage"]
+    out["roughness_d"] = layer["roughness"] / d
+    out["thickness_ratio"] = layer["thickness"] / gap
+    return out
+
+
+def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict) -> dict:
+    """Everything the results table needs from one raw record (ok, blown or failed).
+    regime_rules, stability, settings: the config's `regime`, `stability` and `metrics`."""
+    check_settings(settings)
+    p = raw["params"]
+    out = {
+        "case_id": p["case_id"], "preset": p.get("preset", ""),
+        **p["point"],
+        "seed": p["seed"], "status": raw["status"], "reason": raw.get("reason", ""),
+        "mfr": math.nan, "pd": math.nan, "pd_cv": math.nan, "regime": "",
+        "n_particles": raw.get("n_particles", p.get("n_particles")),
+        "time_step": raw.get("time_step", p["time_step"]),
+        "critical_time_step": raw.get("critical_time_step", p["critical_time_step"]),
+        "time_step_ratio": raw.get("time_step_ratio", p["time_step"] / p["critical_time_step"]),
+        "density_scale": p["density_scale"],
+        "steps": raw.get("steps", math.nan), "simulated_time": raw.get("simulated_time", math.nan),
+        "wall_time": raw.get("wall_time", math.nan),
+        "cpu_time": raw.get("cpu_time", math.nan),
+        "peak_overlap_ratio": raw.get("peak_overlap_ratio", math.nan),
+        # where it happened: the fall into the pile, the pile at rest, the spreading
+        **{f"peak_overlap_{phase}": raw.get("peak_overlap_by_phase", {}).get(phase, math.nan) for phase in PHASES},
+        "final_kinetic_energy": raw.get("final_kinetic_energy", math.nan),
+        "final_ke_per_mgd": (raw["final_kinetic_energy"] / raw["kinetic_energy_scale"]
+                             if "kinetic_energy_scale" in raw else math.nan),
+        "escaped_particles": raw.get("escaped_particles", math.nan),
+        "rolled_off_particles": raw.get("rolled_off_particles", math.nan),
+        "max_speed": raw.get("max_speed_seen", math.nan),
+        # the settle / relax phases ended on their time cap, kinetic energy not yet decayed (the
+        # free rolling of spheres without rolling resistance keeps it up): reported, not flagged
+        "settled_by_time": raw.get("settled_by_time"),
+        "relaxed_by_time": raw.get("relaxed_by_time"),
+        "yade_version": raw.get("yade_version", ""),
+    }
+    new = {k: math.nan for k in NEW_COLUMNS}
+    flags = []
+    if raw["status"] == "ok":
+        measured = measure(raw, settings)
+        out.update({k: measured[k] for k in ("mfr", "pd", "pd_cv")})
+        new.update({k: measured[k] for k in NEW_COLUMNS})
+        out["regime"] = classify(out["mfr"], new["coverage"], new["thickness_ratio"], regime_rules)
+        for name in ("mfr", "pd"):
+            if not 0.0 <= out[name] <= DENSEST_PACKING:
+                flags.append(f"{name} = {out[name]:.4f} outside [0, {DENSEST_PACKING:.4f}]")
+    else:
+        flags.append(f"{raw['status']}: {raw.get('reason', '')}".strip())
+    if out["time_step_ratio"] > 1.0:
+        flags.append(f"time step {out['time_step_ratio']:.2f} x critical")
+    if out["peak_overlap_ratio"] > stability["max_overlap_ratio"]:
+        flags.append(f"peak overlap {out['peak_overlap_ratio']:.3g} R > {stability['max_overlap_ratio']} R")
+    if out["escaped_particles"] > stability["max_escaped"]:
+        flags.append(f"{out['escaped_particles']} spheres escaped the box")
+    out["flagged"] = bool(flags)
+    out["flag_reason"] = "; ".join(flags)
+    out.update(new)
+    return out

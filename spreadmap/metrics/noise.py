@@ -1,0 +1,82 @@
+"""Each case's own noise estimate.
+
+Counting noise (SPEC.md, issue 14): across packing seeds the relative SD of MFR and of PD is about
+c / sqrt(N), N the spheres' worth of volume measured (passed under the blade in the window for
+MFR, in the PD box for PD), c ~ 0.45 in the published fidelity study. The absolute SDs are
+c / sqrt(N) x value.
+
+Within-case estimate (for comparison): batch means of the flow over equal sub-windows of the blade
+travel, from the volume-behind series the scene records every monitor interval (spheres counted
+by centre there, so each batch carries up to about a sphere of rounding at its ends besides the
+flow's own fluctuation); the SD of the window's MFR is SD(batch MFRs) / sqrt(batches).
+
+`counting_constant` checks c against a table of seeds (the fidelity study's cases).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+
+def counting_sd(value: float, n: float, c: float) -> float:
+    """c / sqrt(n) x value: the absolute SD of a measure that counts n spheres' worth of volume."""
+    if not (math.isfinite(value) and math.isfinite(n)):
+        return math.nan
+    return c * abs(value) / math.sqrt(n) if n > 0 else math.inf
+
+
+def batch_means_sd(series, x0: float, x1: float, gap: float, width: float, batches: int) -> tuple[float, int]:
+    """(SD of the window's MFR from batch means, batches used) from the series of
+    [time, blade_rear_x, volume passed] between blade positions x0 and x1. Each batch needs at
+    least two monitor intervals of the series; with fewer than 2 such batches: (nan, 0)."""
+    arr = np.asarray(series, float).reshape(-1, 3) if len(series) else np.zeros((0, 3))
+    x, vol = arr[:, 1], arr[:, 2]
+    inside = (x >= x0) & (x <= x1)
+    intervals = max(int(np.count_nonzero(inside)) - 1, 0)
+    b = min(int(batches), intervals // 2)
+    if b < 2 or x1 <= x0 or np.any(np.diff(x) < 0):
+        return math.nan, 0
+    edges = np.linspace(x0, x1, b + 1)
+    v = np.interp(edges, x, vol)
+    flows = np.diff(v) / (gap * width * np.diff(edges))
+    return float(np.std(flows, ddof=1) / math.sqrt(b)), b
+
+
+def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name"), level: float = 0.9) -> pd.DataFrame:
+    """Per cell of seeds (default: preset x point name): mean, seed SD and relative SD of MFR and
+    PD, N = spheres' worth of volume passed (MFR x h x W x window travel / sphere volume, W and the
+    window from the preset, in d) and c = relative SD x sqrt(N), with a `level` confidence interval
+    from the chi-square law of the sample variance (normal seeds). Rows not `ok` or flagged are
+    left out. For PD the box is the window (the published study's): N_pd = PD x h x W x window / v."""
+    ok = cases[(cases["status"] == "ok") & ~cases.get("flagged", pd.Series(False, index=cases.index)).fillna(False).astype(bool)]
+    rows = []
+    for key, cell in ok.groupby(list(group)):
+        key = dict(zip(group, key if isinstance(key, tuple) else (key,)))
+        preset = presets[key["preset"]] if "preset" in key else presets[cell["preset"].iloc[0]]
+        d, h = cell["d_um"].iloc[0], cell["h_um"].iloc[0]
+        spheres_per_fraction = h * preset["width_d"] * d * preset["window_d"] * d / (math.pi * d ** 3 / 6.0)
+        row = {**key, "f": cell["f"].iloc[0], "d_um": d, "h_um": h, "v_mm_s": cell["v_mm_s"].iloc[0], "seeds": len(cell)}
+        dof = len(cell) - 1
+        lo_q, hi_q = stats.chi2.ppf([(1 + level) / 2, (1 - level) / 2], dof) if dof > 0 else (math.nan, math.nan)
+        for name in ("mfr", "pd"):
+            mean, sd = cell[name].mean(), cell[name].std(ddof=1)
+            n = mean * spheres_per_fraction
+            c = sd / mean * math.sqrt(n)
+            row.update({f"{name}_mean": mean, f"{name}_sd": sd, f"{name}_rel_sd": sd / mean, f"n_{name}": n,
+                        f"c_{name}": c, f"c_{name}_lo": c * math.sqrt(dof / lo_q), f"c_{name}_hi": c * math.sqrt(dof / hi_q)})
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def pooled_constant(cells: pd.DataFrame, name: str, level: float = 0.9) -> tuple[float, float, float]:
+    """c pooled over cells (root of the dof-weighted mean of c^2: the pooled relative variance x N)
+    with its `level` chi-square interval."""
+    dof = (cells["seeds"] - 1).to_numpy(float)
+    c2 = cells[f"c_{name}"].to_numpy(float) ** 2
+    total = dof.sum()
+    pooled = math.sqrt(np.sum(dof * c2) / total)
+    lo_q, hi_q = stats.chi2.ppf([(1 + level) / 2, (1 - level) / 2], total)
+    return pooled, pooled * math.sqrt(total / lo_q), pooled * math.sqrt(total / hi_q)
