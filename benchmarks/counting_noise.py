@@ -1,0 +1,64 @@
+#!/usr/bin/env python
+"""Is the seed-to-seed spread of MFR and PD counting noise, relative SD = c / sqrt(N)? Checks the
+constant c of the case noise estimate (config `metrics.counting_noise_c`) against a table of
+cases run with several packing seeds per cell (default: the published fidelity study,
+docs/fidelity/cases_presets.csv; cells = preset x point).
+
+Per cell: seed SD of MFR and PD, N = MFR x h x W x window / sphere volume (W and the window from
+the preset in config.yaml, in d; for PD the published box was the window), c = relative SD x
+sqrt(N) with its 90 % chi-square interval; pooled c over the cells; Bartlett's test (scipy) that c
+is the same in every cell (the residuals (value / cell mean - 1) x sqrt(N) have equal variances).
+No raw snapshots are needed (the table's MFR gives N); N at a preset is an estimate from the mean
+MFR, not each case's own count.
+
+    .venv/bin/python benchmarks/counting_noise.py
+    .venv/bin/python benchmarks/counting_noise.py --cases other_cases.csv --config config.yaml
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+import pandas as pd  # noqa: E402
+from scipy import stats  # noqa: E402
+
+from spreadmap import config as spreadmap_config  # noqa: E402
+from spreadmap.metrics import counting_constant, pooled_constant  # noqa: E402
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", default=str(ROOT / "docs" / "fidelity" / "cases_presets.csv"))
+    ap.add_argument("--config", default=str(ROOT / "config.yaml"))
+    args = ap.parse_args(argv)
+    config = spreadmap_config.load(args.config)
+    cases = pd.read_csv(args.cases)
+    cells = counting_constant(cases, config["presets"])
+    pd.set_option("display.width", 200)
+    show = ["preset", "name", "d_um", "h_um", "seeds", "mfr_mean", "mfr_rel_sd", "n_mfr", "c_mfr", "c_mfr_lo", "c_mfr_hi",
+            "pd_mean", "pd_rel_sd", "c_pd", "c_pd_lo", "c_pd_hi"]
+    print(f"cases: {args.cases} ({len(cases)} rows, {len(cells)} cells)")
+    print(cells[show].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+    print(f"configured c (metrics.counting_noise_c): {config['metrics']['counting_noise_c']}")
+    ok = cases[(cases["status"] == "ok") & ~cases["flagged"].fillna(False).astype(bool)]
+    for name in ("mfr", "pd"):
+        est, lo, hi = pooled_constant(cells, name)
+        print(f"{name}: pooled c = {est:.3f}, 90 % interval [{lo:.3f}, {hi:.3f}]; cells range "
+              f"{cells[f'c_{name}'].min():.3f}-{cells[f'c_{name}'].max():.3f}")
+        groups = []
+        for (_, row) in cells.iterrows():
+            values = ok[(ok["preset"] == row["preset"]) & (ok["name"] == row["name"])][name]
+            groups.append((values / row[f"{name}_mean"] - 1.0) * math.sqrt(row[f"n_{name}"]))
+        stat, p = stats.bartlett(*groups)
+        print(f"{name}: Bartlett test of one c in all cells: statistic {stat:.2f} on {len(groups) - 1} dof, p = {p:.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
