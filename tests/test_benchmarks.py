@@ -101,3 +101,39 @@ def test_main_job_refuses_a_used_workdir(tmp_path):
     (tmp_path / "something").write_text("x")
     r = run("main_job.py", "--dry-run", "--workdir", tmp_path, timeout=60)
     assert r.returncode != 0 and "not empty" in r.stderr
+
+
+def test_counting_noise_on_the_published_fidelity_study():
+    """The configured noise constant lies inside the pooled interval the published seeds give."""
+    r = run("counting_noise.py", timeout=120)
+    assert r.returncode == 0, (r.stdout + r.stderr)[-4000:]
+    configured = float(re.search(r"configured c \(metrics.counting_noise_c\): (\S+)", r.stdout).group(1))
+    est, lo, hi = map(float, re.search(r"mfr: pooled c = (\S+), 90 % interval \[(\S+), (\S+)\]", r.stdout).groups())
+    assert lo < est < hi and lo <= configured <= hi, r.stdout
+    assert len(re.findall(r"Bartlett test", r.stdout)) == 2 and "16 cells" in r.stdout
+
+
+def test_layer_metrics_on_a_constructed_record(tmp_path):
+    """Two simple cubic layers (gap 2 d) behind a blade that moved 10 d: the script prints the
+    old and new metrics side by side; both MFRs are pi/6 here and the layer decomposes PD."""
+    import json
+
+    d = 30e-6
+    xs, ys, zs = np.arange(0.5, 20, 1.0), np.arange(0.5, 4, 1.0), np.array([0.5, 1.5])
+    end = np.array([(x, y, z) for x in xs for y in ys for z in zs]) * d
+    start = end[end[:, 0] < 10 * d]
+    snap = lambda p, x: {"positions": p.tolist(), "radii": [d / 2] * len(p), "blade_rear_x": x}  # noqa: E731
+    raw = {"status": "ok", "peak_overlap_ratio": 0.01, "escaped_particles": 0,
+           "params": {"case_id": "lattice", "preset": "smoke", "seed": 1, "diameter": d, "gap": 2 * d, "width": 4 * d,
+                      "blade_thickness": 2 * d, "time_step": 1e-7, "critical_time_step": 4e-7, "density_scale": 1000.0,
+                      "point": {"f": 0.3, "d_um": 30.0, "h_um": 60.0, "v_mm_s": 10.0}},
+           "snapshots": {"window_start": snap(start, 10 * d), "window_end": snap(end, 20 * d)}}
+    paths = []
+    for i in range(3):
+        (tmp_path / f"raw{i}.json").write_text(json.dumps(raw))
+        paths.append(tmp_path / f"raw{i}.json")
+    r = run("layer_metrics.py", *paths, "--csv", tmp_path / "out.csv", timeout=120)
+    assert r.returncode == 0, (r.stdout + r.stderr)[-4000:]
+    out = pd.read_csv(tmp_path / "out.csv")
+    assert np.allclose(out["mfr"], np.pi / 6) and np.allclose(out["mfr_centres"], np.pi / 6)
+    assert "layer_packing x thickness_ratio / PD: 1.00" in r.stdout and (out["regime"] == "normal").all()
