@@ -127,8 +127,11 @@ def test_measured_span_ends_a_clearance_behind_the_blade_and_refuses_a_short_box
 
 # ---------------------------------------------------------------------------------------- noise
 def test_counting_sd():
-    assert counting_sd(0.3, 36.0, 0.45) == pytest.approx(0.45 / 6 * 0.3, rel=1e-15)
-    assert counting_sd(0.3, 0.0, 0.45) == math.inf and math.isnan(counting_sd(math.nan, 5.0, 0.45))
+    """36 spheres' worth of a measure of 0.3 (1/120 a sphere): 0.45 / 6 x 0.3; below one sphere
+    the SD of one sphere's worth, so a jammed case (nothing passed) keeps a finite weight."""
+    assert counting_sd(36.0, 0.3 / 36, 0.45) == pytest.approx(0.45 / 6 * 0.3, rel=1e-15)
+    assert counting_sd(0.0, 0.01, 0.45) == counting_sd(0.4, 0.01, 0.45) == pytest.approx(0.0045, rel=1e-15)
+    assert math.isnan(counting_sd(math.nan, 0.01, 0.45))
 
 
 def poisson_series(rng, rate, x0, x1, step, vol=1.0):
@@ -288,6 +291,18 @@ def test_pd_box_ends_a_clearance_behind_the_blade():
     assert with_blob["pd"] > m["pd"] * 1.05
     with pytest.raises(ValueError, match="metrics.pd_clearance_d"):
         case_metrics(raw, RULES, BOUNDS, {**SETTINGS, "pd_clearance_d": 8.5})
+
+
+def test_a_jammed_case_keeps_a_finite_noise_estimate():
+    """Nothing passed (the deposit of the end snapshot removed): MFR 0, jamming, SDs of one
+    sphere's worth (v / (h W travel) = (pi/6) / 80 for MFR, (pi/6) / 72 for the 9 d PD box)."""
+    raw = raw_record(layers=1)
+    end = raw["snapshots"]["window_end"]
+    end["positions"], end["radii"] = raw["snapshots"]["window_start"]["positions"], raw["snapshots"]["window_start"]["radii"]
+    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    assert m["mfr"] == 0.0 and m["regime"] == "jamming" and m["n_passed"] == 0.0
+    assert m["mfr_sd"] == pytest.approx(0.45 * math.pi / 6 / 80, rel=1e-12)
+    assert m["pd_sd"] == pytest.approx(0.45 * math.pi / 6 / 72, rel=1e-12)
 
 
 def test_a_patchy_deposit_is_short_feed_whatever_its_flow():

@@ -59,8 +59,9 @@ def measure(raw: dict, settings: dict) -> dict:
     c = settings["counting_noise_c"]
     out["n_passed"] = window_passed_volume(s1, s2) / v_sphere
     out["n_pd"] = out["pd"] * (x1 - x0) * width * gap / v_sphere
-    out["mfr_sd"] = counting_sd(out["mfr"], out["n_passed"], c)
-    out["pd_sd"] = counting_sd(out["pd"], out["n_pd"], c)
+    travel = s2["blade_rear_x"] - s1["blade_rear_x"]
+    out["mfr_sd"] = counting_sd(out["n_passed"], v_sphere / (gap * width * travel), c)
+    out["pd_sd"] = counting_sd(out["n_pd"], v_sphere / ((x1 - x0) * width * gap), c)
     out["mfr_sd_within"] = batch_means_sd(raw.get("behind_series", []), s1["blade_rear_x"], s2["blade_rear_x"],
                                           gap, width, settings["within_batches"])[0]
     layer = layer_quality(s2["positions"], s2["radii"], x0, x1, width, settings["surface_grid_d"] * d)

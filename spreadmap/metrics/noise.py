@@ -3,7 +3,8 @@
 Counting noise (SPEC.md, issue 14): across packing seeds the relative SD of MFR and of PD is about
 c / sqrt(N), N the spheres' worth of volume measured (passed under the blade in the window for
 MFR, in the PD box for PD), c ~ 0.45 in the published fidelity study. The absolute SDs are
-c / sqrt(N) x value.
+c / sqrt(N) x value (one sphere's worth
+at least).
 
 Within-case estimate (for comparison): batch means of the flow over equal sub-windows of the blade
 travel, from the volume-behind series the scene records every monitor interval (spheres counted
@@ -21,11 +22,14 @@ import pandas as pd
 from scipy import stats
 
 
-def counting_sd(value: float, n: float, c: float) -> float:
-    """c / sqrt(n) x value: the absolute SD of a measure that counts n spheres' worth of volume."""
-    if not (math.isfinite(value) and math.isfinite(n)):
+def counting_sd(n: float, per_sphere: float, c: float) -> float:
+    """Absolute SD of a measure that counts n spheres' worth of volume, each sphere worth
+    `per_sphere` of the measure: c sqrt(n) per_sphere, i.e. c / sqrt(n) x value. Below one sphere
+    (a jammed case, an empty box) the SD of one sphere's worth, c x per_sphere: a measured zero
+    is not exact."""
+    if not (math.isfinite(n) and math.isfinite(per_sphere)):
         return math.nan
-    return c * abs(value) / math.sqrt(n) if n > 0 else math.inf
+    return c * math.sqrt(max(n, 1.0)) * abs(per_sphere)
 
 
 def batch_means_sd(series, x0: float, x1: float, gap: float, width: float, batches: int) -> tuple[float, int]:
