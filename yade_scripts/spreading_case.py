@@ -31,6 +31,7 @@ from yade import (Bo1_Box_Aabb, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Bo
                   InsertionSortCollider, InteractionLoop,
                   Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin,
                   NewtonIntegrator, PyRunner)
+import yade._utils
 import yade.config
 
 # --- case parameters (written by spreadmap's renderer; the values below are a demo case) ---
@@ -70,6 +71,12 @@ PARAMS = {
     "rolling_friction": 0.0,
     "rolling_stiffness": 0.0,
     "stop_after": None,
+    "substrate": "flat",
+    "substrate_jitter": 0.5,
+    "overlap_every": 1,
+    "target_passed": None,
+    "window_max_travel": 0.00032,
+    "floor_ahead": 40.0,
 }
 # --- end of case parameters ---
 
@@ -118,9 +125,13 @@ L = P["pile_length"]
 h = P["gap"]
 tb = P["blade_thickness"]
 x_window_start = L + P["transient_travel"]          # blade rear face positions
-x_window_end = x_window_start + P["window_travel"]
+x_window_end = x_window_start + P["window_travel"]  # the window's end (its shortest, with a target)
+adaptive_window = P.get("target_passed") is not None
+# with a target the window ends once target_passed spheres' worth of volume has passed, or at
+# window_max_travel, whichever comes first
+x_window_cap = x_window_start + (P["window_max_travel"] if adaptive_window else P["window_travel"])
 x_lo = -tb - 20.0 * d                                # modelled length of the floor
-x_hi = x_window_end + L + 40.0 * d
+x_hi = x_window_cap + L + P["floor_ahead"] * d
 z_hi = P["cloud_height"] + 40.0 * d
 sphere_volume = math.pi * d ** 3 / 6.0
 mass = P["density"] * sphere_volume
@@ -138,9 +149,42 @@ O.materials.append(smooth)
 cx, span = 0.5 * (x_lo + x_hi), 0.5 * (x_hi - x_lo)
 # floor (friction f, like the powder) and the two frictionless side walls: boxes whose inner
 # faces are at z = 0, y = 0 and y = W.
-O.bodies.append(utils.box((cx, 0.5 * W, -d), (span, 0.5 * W + 2 * d, d), fixed=True, material=frict))
+# Collision masks: the powder (3) meets everything; the rough substrate and the floor under it (6)
+# meet the powder but not one another (the collider's avoidSelfInteractionMask 4): fixed bodies
+# never interact, and no potential interaction between them costs a step. Blade and walls: 1.
+POWDER_MASK, SUBSTRATE_MASK, AVOID_MASK = 3, 6, 4
+floor_top = -d if P["substrate"] == "rough" else 0.0   # under a rough substrate, a backstop
+O.bodies.append(utils.box((cx, 0.5 * W, floor_top - d), (span, 0.5 * W + 2 * d, d), fixed=True, material=frict,
+                          mask=SUBSTRATE_MASK if P["substrate"] == "rough" else 1))
 for yc in (-d, W + d):
     O.bodies.append(utils.box((cx, yc, 0.5 * z_hi), (span, d, 0.5 * z_hi + d), fixed=True, material=smooth))
+# A rough substrate (the previous layer): fixed spheres of the powder's diameter on a hexagonal
+# lattice (seeded offset, rows along x), each lowered by a seeded random depth in
+# [0, substrate_jitter x R], so that their highest points lie in [-jitter R, 0]: z = 0 is the top of
+# the substrate, the reference of the gap h and of every layer metric. The flat floor box stays
+# below it (its face at z = -d; a sphere of the powder cannot pass between touching substrate spheres).
+substrate = {"positions": [], "radii": []}
+if P["substrate"] == "rough":
+    import random
+    rng = random.Random(1000003 * int(P["seed"]) + 17)
+    row_pitch = math.sqrt(3.0) * R
+    y0 = rng.uniform(0.0, row_pitch)
+    x0 = rng.uniform(0.0, d)
+    rows = int(math.ceil((W + 2 * d) / row_pitch)) + 1
+    for j in range(rows):
+        yc = -d + y0 + j * row_pitch
+        if yc > W + R:
+            break
+        xc = x_lo + x0 + (0.5 * d if j % 2 else 0.0)
+        while xc < x_hi:
+            zc = -R - rng.uniform(0.0, P["substrate_jitter"] * R)
+            O.bodies.append(utils.sphere((xc, yc, zc), R, fixed=True, material=frict, mask=SUBSTRATE_MASK))
+            substrate["positions"].append([xc, yc, zc])
+            substrate["radii"].append(R)
+            xc += d
+elif P["substrate"] != "flat":
+    log("REFUSED: substrate %r is neither 'flat' nor 'rough'" % P["substrate"])
+    sys.exit(EXIT_REFUSED)
 temporary_walls = [
     O.bodies.append(utils.box((xc, 0.5 * W, 0.5 * P["cloud_height"]), (d, 0.5 * W, 0.5 * P["cloud_height"] + d),
                               fixed=True, material=smooth))
@@ -155,6 +199,8 @@ if placed != int(P["n_particles"]):
         "lower the config key scene.cloud_fraction" % (placed, P["n_particles"], P["cloud_height"] * 1e6))
     sys.exit(EXIT_FAILED)
 sphere_ids = list(cloud.toSimulation(material=frict))
+for i in sphere_ids:
+    O.bodies[i].mask = POWDER_MASK
 
 # Hertz normal, Mindlin tangential with the Coulomb cap; viscous damping set by YADE from the
 # restitution coefficient (en, es); rolling resistance (ScGeom6D geometry) only when asked for.
@@ -170,12 +216,13 @@ if P["rolling_resistance"]:
 newton = NewtonIntegrator(gravity=(0, 0, -P["gravity"]), damping=P["settle_damping"])
 O.engines = [
     ForceResetter(),
-    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()]),
+    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()], avoidSelfInteractionMask=AVOID_MASK),
     InteractionLoop(geometry_functors, [ip2], [law]),
     newton,
     PyRunner(command="watchdog()", iterPeriod=int(P["watchdog_every"])),
     PyRunner(command="control()", iterPeriod=int(P["control_every"])),
     PyRunner(command="monitor()", iterPeriod=int(P["monitor_every"])),
+    PyRunner(command="record_overlap()", iterPeriod=int(P["overlap_every"])),
 ]
 
 state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": None,
@@ -272,6 +319,20 @@ def monitor():
         state["behind_series"].append([O.time, x, volume_behind(x)])
 
 
+def record_overlap():
+    """The peak sphere-sphere overlap / R (YADE's C++ maxOverlapRatio: u_N over the reduced radius
+    2 r1 r2 / (r1 + r2), = R for equal spheres), every overlap_every steps: a step short against the
+    shortest impact (the renderer sets it from Hertz's contact duration at the fastest expected
+    impact), so no impact's peak is missed. Contacts with boxes (flat floor, blade, walls) are
+    checked by monitor() only."""
+    overlap = yade._utils.maxOverlapRatio()
+    if overlap > state["peak_overlap_ratio"]:
+        state["peak_overlap_ratio"] = overlap
+    by_phase = state["peak_overlap_by_phase"]
+    if overlap > by_phase.get(state["phase"], 0.0):
+        by_phase[state["phase"]] = overlap
+
+
 def kinetic_energy_settled():
     return utils.kineticEnergy() < P["ke_tolerance"] * ke_scale
 
@@ -310,19 +371,33 @@ def control():
             state["snapshots"]["blade_start"] = snapshot()
     elif phase == "move":
         x = blade_rear_x()
-        if "window_start" not in state["snapshots"] and x >= x_window_start:
-            state["snapshots"]["window_start"] = snapshot()
-            log("measurement window opens at t = %.4g s" % O.time)
+        if "window_start" not in state["snapshots"]:
+            if x >= x_window_start:
+                state["snapshots"]["window_start"] = snapshot()
+                state["window_start_volume"] = volume_behind(x)
+                log("measurement window opens at t = %.4g s" % O.time)
+        elif adaptive_window:
+            passed = (volume_behind(x) - state["window_start_volume"]) / sphere_volume
+            if "window_middle" not in state["snapshots"] and passed >= 0.5 * P["target_passed"]:
+                state["snapshots"]["window_middle"] = snapshot()
+            if x >= x_window_end and (passed >= P["target_passed"] or x >= x_window_cap):
+                state["window_closed_by"] = "target" if passed >= P["target_passed"] else "travel cap"
+                if "window_middle" not in state["snapshots"]:
+                    state["snapshots"]["window_middle"] = snapshot()
+                state["snapshots"]["window_end"] = snapshot()
+                monitor()
+                finish("ok")
         elif "window_middle" not in state["snapshots"] and x >= 0.5 * (x_window_start + x_window_end):
             state["snapshots"]["window_middle"] = snapshot()
         elif "window_middle" in state["snapshots"] and x >= x_window_end:
+            state["window_closed_by"] = "travel"
             state["snapshots"]["window_end"] = snapshot()
             monitor()
             finish("ok")
     now = time.time()
     if now - state["last_progress"] >= P["progress_every_s"]:
         state["last_progress"] = now
-        travel = ("blade %.1f of %.1f d " % ((blade_rear_x() + tb) / d, (x_window_end + tb) / d)
+        travel = ("blade %.1f of %.1f d " % ((blade_rear_x() + tb) / d, (x_window_cap + tb) / d)
                   if phase == "move" else "")
         total = " of ~%d" % P["estimated_steps"] if P.get("estimated_steps") else ""
         log("progress %s phase=%s t=%.4g s steps=%d%s %swall=%.0f s"
@@ -354,8 +429,11 @@ raw = {
     "settled_by_time": state.get("settled_by_time"),
     "relaxed_by_time": state.get("relaxed_by_time"),
     "move_start": state["move_start"],
-    "window": {"x_start": x_window_start, "x_end": x_window_end},
-    "geometry": {"width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
+    "window": {"x_start": x_window_start, "x_end": (state["snapshots"].get("window_end") or {}).get("blade_rear_x", x_window_end),
+               "x_cap": x_window_cap, "closed_by": state.get("window_closed_by"),
+               "target_passed": P.get("target_passed")},
+    "substrate": substrate,
+    "geometry": {"floor_top": floor_top, "width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
                  "floor_x": [x_lo, x_hi], "pile_length": L},
     "peak_overlap_ratio": state["peak_overlap_ratio"],
     "peak_overlap_by_phase": state["peak_overlap_by_phase"],  # settle (the fall), relax, move (spreading)
