@@ -17,7 +17,7 @@ try:
 except spreadmap_config.ConfigError as error:
     raise WorkflowError(f"spreadmap: bad configuration: {error}") from None
 
-RETRIES = 1  # a case that produced nothing (crash, timeout) is tried once more, then recorded as failed
+RETRIES = 1  # a crash or a timeout is tried once more, then recorded as failed (a refusal: at once)
 CASES = {}  # case id -> scene parameters of the YADE script
 SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list of (case id, label)
 RANGES = config.get("ranges")
