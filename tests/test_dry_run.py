@@ -1,5 +1,6 @@
 """The main job's DAG on real Snakemake, planned without running anything (`snakemake -n`), and
 the workflow's lint. Cheap: no YADE, a few seconds each."""
+import re
 import subprocess
 
 from conftest import ROOT, SNAKEMAKE, make_workflow, planned_jobs, snakemake
@@ -31,3 +32,19 @@ def test_lint_is_clean():
     lint = subprocess.run([SNAKEMAKE, "--lint"], cwd=ROOT, capture_output=True, text=True, timeout=120)
     out = lint.stdout + lint.stderr
     assert lint.returncode == 0 and "Lints for" not in out, out[-3000:]
+
+
+def test_the_stated_runtime_of_a_reference_case_is_what_snakemake_asks_for(tmp_path):
+    """The SLURM profile and the README tell a cluster user how long a reference case's job asks
+    for; the number is the one Snakemake plans (read from the dry run), not a stale estimate."""
+    point = {"f": 0.3, "d_um": 12, "h_um": 65, "v_mm_s": 10, "preset": "reference"}
+    wf = make_workflow(tmp_path, {"points": {"named": {"small": point}}, "pictures": {"cases": [], "vtk": []}}, DROP)
+    dry = snakemake(wf, "points", "-n")
+    assert dry.returncode == 0, dry.stderr[-3000:]
+    runtimes = {int(m) for m in re.findall(r"\bruntime=(\d+)\b", dry.stdout)}
+    assert len(runtimes) == 1, runtimes
+    minutes = runtimes.pop()
+    profile = " ".join(line.lstrip("# ") for line in (ROOT / "profiles" / "slurm" / "config.yaml").read_text().split("\n"))
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert f"fixed 2 h timeout asks for {minutes} min" in profile
+    assert f"so its jobs ask for {minutes} min" in readme
