@@ -112,14 +112,6 @@ def test_unsafe_forced_step_refused_before_anything_runs(config):
     assert p["time_step"] == safe and p["time_step"] / p["critical_time_step"] == pytest.approx(0.5)
 
 
-def test_rayleigh_step_matches_spec_numbers():
-    """SPEC.md: ~5.3e-8 s at d = 10 um and ~2.7e-7 s at d = 50 um with the physical constants."""
-    assert rayleigh_time_step(5e-6, 7980.0, 2.1e9, 0.3) == pytest.approx(5.33e-8, rel=0.01)
-    assert rayleigh_time_step(25e-6, 7980.0, 2.1e9, 0.3) == pytest.approx(2.67e-7, rel=0.01)
-    # density x100 -> a 10x larger step
-    assert rayleigh_time_step(5e-6, 798000.0, 2.1e9, 0.3) == pytest.approx(5.33e-7, rel=0.01)
-
-
 def test_rolling_resistance_option_runs_and_stops_rolling(config, tmp_path):
     """Switched on, Mindlin's rolling moment (ScGeom6D) damps the free rolling of the deposit:
     less kinetic energy at the end and no more spheres rolling off the floor than without it."""
