@@ -1,5 +1,6 @@
-"""The results table: one row per case (parameters, MFR, PD, regime, diagnostics, preset, wall
-time and peak memory from Snakemake's benchmark), and the run summary built from it."""
+"""The results table: one row per case (parameters, MFR, PD, regime, flags, the reason a case did
+not finish (with its log's verdict), diagnostics, preset, wall time and peak memory from
+Snakemake's benchmark), and the run summary built from it."""
 from __future__ import annotations
 
 import json
@@ -11,7 +12,7 @@ import pandas as pd
 from .files import atomic_path
 
 FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
-                 "mfr", "pd", "regime", "flagged", "flag_reason"]
+                 "mfr", "pd", "regime", "flagged", "flag_reason", "reason"]
 
 
 def flagged(table: pd.DataFrame) -> np.ndarray:
