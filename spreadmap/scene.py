@@ -90,10 +90,12 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         window_cap = window
         window_expected = window
     else:
-        # sized by what will pass: the target's spheres plus what passes in the transient and
-        # under the blade at a generous MFR, times a margin (not the densest packing)
+        # The whole pile is sized by what will pass: the target's spheres plus what passes in the
+        # transient and under the blade at a generous MFR, times a margin (not the densest
+        # packing); expressed per unit width, as the heap-reserve rule above, over the pile's height
         mfr_high = scene["mfr_expected_max"]
         need = scene["pile_margin"] * (target * sphere_volume / width + mfr_high * h * (transient + blade))
+        need *= heap / (h + heap)  # the whole pile, not only its heap above the gap, is the reserve
         window_cap = max(window, preset["window_max_d"] * d)
         window_expected = min(window_cap, max(window, target * sphere_volume / (scene["mfr_expected"] * h * width)))
     pile_length = max(preset["pile_length_min_d"] * d, need / (packing * heap))
@@ -169,4 +171,10 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "target_passed": None if target is None else float(target),
         "window_max_travel": window_cap,
         "floor_ahead": float(scene.get("floor_ahead_d", 40.0)),
+        # the window opens once the flow is steady, at least steady_min_d beyond the pile (None:
+        # after the fixed transient_d), comparing the flow over two spans of steady_span_d
+        "steady_min_travel": None if preset.get("steady_min_d") is None else preset["steady_min_d"] * d,
+        "steady_span": float(scene.get("steady_span_d", 2.0)) * d,
+        "steady_z": float(scene.get("steady_z", 2.0)),
+        "counting_noise_c": float(config.get("metrics", {}).get("counting_noise_c", 0.45)),
     }

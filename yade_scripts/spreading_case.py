@@ -77,6 +77,10 @@ PARAMS = {
     "target_passed": None,
     "window_max_travel": 0.00032,
     "floor_ahead": 40.0,
+    "steady_min_travel": None,
+    "steady_span": 8e-05,
+    "steady_z": 2.0,
+    "counting_noise_c": 0.45,
 }
 # --- end of case parameters ---
 
@@ -124,12 +128,15 @@ W = P["width"]
 L = P["pile_length"]
 h = P["gap"]
 tb = P["blade_thickness"]
-x_window_start = L + P["transient_travel"]          # blade rear face positions
-x_window_end = x_window_start + P["window_travel"]  # the window's end (its shortest, with a target)
+# Blade rear face positions. The window opens after the blade has swept the pile and a transient
+# (transient_travel); with steady_min_travel set, it opens earlier, as soon as the flow under the
+# blade is steady (steady_test), transient_travel being then the cap. It lasts window_travel; with a
+# target it goes on until target_passed spheres' worth of volume has passed, up to window_max_travel.
+x_window_start = L + P["transient_travel"]          # at the latest
 adaptive_window = P.get("target_passed") is not None
-# with a target the window ends once target_passed spheres' worth of volume has passed, or at
-# window_max_travel, whichever comes first
-x_window_cap = x_window_start + (P["window_max_travel"] if adaptive_window else P["window_travel"])
+window_longest = P["window_max_travel"] if adaptive_window else P["window_travel"]
+x_window_cap = x_window_start + window_longest      # the farthest the blade can go
+x_window_end = x_window_start + P["window_travel"]  # reset when the window opens
 x_lo = -tb - 20.0 * d                                # modelled length of the floor
 x_hi = x_window_cap + L + P["floor_ahead"] * d
 z_hi = P["cloud_height"] + 40.0 * d
@@ -337,6 +344,31 @@ def kinetic_energy_settled():
     return utils.kineticEnergy() < P["ke_tolerance"] * ke_scale
 
 
+def steady_test(x):
+    """Is the flow under the blade steady? Once the blade is steady_min_travel beyond the pile, the
+    spheres' worth of volume passed over the last two spans of travel (n1, then n2) must agree
+    within steady_z counting-noise SDs: |n2 - n1| <= z c sqrt(n1 + n2), c the counting-noise
+    constant (relative SD c / sqrt(N)). Reads the passed volume at every control step."""
+    if P.get("steady_min_travel") is None:
+        return False
+    series = state.setdefault("approach_series", [])
+    series.append((x, volume_behind(x)))
+    if x < L + P["steady_min_travel"] or x - series[0][0] < 2.0 * P["steady_span"]:
+        return False
+
+    def passed_at(xq):  # the last record at or before xq
+        best = series[0][1]
+        for xi, vi in series:
+            if xi > xq:
+                break
+            best = vi
+        return best
+
+    v0, v1, v2 = passed_at(x - 2.0 * P["steady_span"]), passed_at(x - P["steady_span"]), series[-1][1]
+    n1, n2 = (v1 - v0) / sphere_volume, (v2 - v1) / sphere_volume
+    return n1 > 0 and n2 > 0 and abs(n2 - n1) <= P["steady_z"] * P["counting_noise_c"] * math.sqrt(n1 + n2)
+
+
 def start_phase(name):
     state["phase_times"][state["phase"] + "_end"] = O.time
     state["phase"], state["phase_start"] = name, O.time
@@ -344,6 +376,7 @@ def start_phase(name):
 
 
 def control():
+    global x_window_end, x_window_cap
     phase, elapsed = state["phase"], O.time - state["phase_start"]
     if phase == "settle":
         if (elapsed > 0.2 * P["settle_max_time"] and kinetic_energy_settled()) or elapsed > P["settle_max_time"]:
@@ -372,10 +405,15 @@ def control():
     elif phase == "move":
         x = blade_rear_x()
         if "window_start" not in state["snapshots"]:
-            if x >= x_window_start:
+            steady = steady_test(x)
+            if x >= x_window_start or steady:
+                x_window_end = x + P["window_travel"]
+                x_window_cap = x + window_longest
+                state["window_opened_by"] = "steady flow" if steady else "transient cap"
                 state["snapshots"]["window_start"] = snapshot()
                 state["window_start_volume"] = volume_behind(x)
-                log("measurement window opens at t = %.4g s" % O.time)
+                log("measurement window opens at t = %.4g s, blade %.1f d beyond the pile (%s)"
+                    % (O.time, (x - L) / d, state["window_opened_by"]))
         elif adaptive_window:
             passed = (volume_behind(x) - state["window_start_volume"]) / sphere_volume
             if "window_middle" not in state["snapshots"] and passed >= 0.5 * P["target_passed"]:
@@ -387,7 +425,7 @@ def control():
                 state["snapshots"]["window_end"] = snapshot()
                 monitor()
                 finish("ok")
-        elif "window_middle" not in state["snapshots"] and x >= 0.5 * (x_window_start + x_window_end):
+        elif "window_middle" not in state["snapshots"] and x >= x_window_end - 0.5 * P["window_travel"]:
             state["snapshots"]["window_middle"] = snapshot()
         elif "window_middle" in state["snapshots"] and x >= x_window_end:
             state["window_closed_by"] = "travel"
@@ -429,8 +467,9 @@ raw = {
     "settled_by_time": state.get("settled_by_time"),
     "relaxed_by_time": state.get("relaxed_by_time"),
     "move_start": state["move_start"],
-    "window": {"x_start": x_window_start, "x_end": (state["snapshots"].get("window_end") or {}).get("blade_rear_x", x_window_end),
+    "window": {"x_start": (state["snapshots"].get("window_start") or {}).get("blade_rear_x", x_window_start), "x_end": (state["snapshots"].get("window_end") or {}).get("blade_rear_x", x_window_end),
                "x_cap": x_window_cap, "closed_by": state.get("window_closed_by"),
+               "opened_by": state.get("window_opened_by"),
                "target_passed": P.get("target_passed")},
     "substrate": substrate,
     "geometry": {"floor_top": floor_top, "width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
