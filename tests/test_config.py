@@ -33,7 +33,8 @@ def test_bad_values_are_refused_with_the_key_named(raw_config, change, message):
 
 def test_the_shipped_config_is_valid_and_defaults_are_filled(raw_config):
     cfg = validate(copy.deepcopy(raw_config))
-    assert cfg["scene"]["cloud_fraction"] == 0.25  # a default from the schema
+    assert "settle_time_factor" not in raw_config["scene"]
+    assert cfg["scene"]["settle_time_factor"] == 4  # a default from the schema
 
 
 @pytest.mark.parametrize("overrides,message", [
