@@ -164,6 +164,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "stop_after": None,
         "substrate": substrate.get("kind", "flat"),
         "substrate_jitter": float(substrate.get("jitter", 0.5)),
+        "substrate_ahead": float(substrate.get("ahead_d", 12.0)),
         # the peak overlap is read every overlap_every steps: an eighth of the shortest contact
         # expected, so that a sampled value is within cos(pi/16) = 98 % of an impact's peak
         "overlap_every": max(1, int(contact / (8.0 * dt))),

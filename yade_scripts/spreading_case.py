@@ -77,6 +77,7 @@ PARAMS = {
     "target_passed": None,
     "window_max_travel": 0.00032,
     "floor_ahead": 40.0,
+    "substrate_ahead": 12.0,
     "steady_min_travel": None,
     "steady_span": 8e-05,
     "steady_z": 2.0,
@@ -170,28 +171,45 @@ for yc in (-d, W + d):
 # [0, substrate_jitter x R], so that their highest points lie in [-jitter R, 0]: z = 0 is the top of
 # the substrate, the reference of the gap h and of every layer metric. The flat floor box stays
 # below it (its face at z = -d; a sphere of the powder cannot pass between touching substrate spheres).
-substrate = {"positions": [], "radii": []}
+# Fixed spheres cost time in every step, so the substrate is laid only as far as the powder
+# reaches: to substrate_ahead beyond the pile's far end, and extended in steps of 10 d as the blade
+# advances (extend_substrate, from control()); the lattice and its random depths are the same
+# whenever they are laid.
+x_substrate = -tb - 4.0 * d  # behind the blade's start only what the collapsing pile can reach
+substrate = {"positions": [], "radii": [], "rows": [], "x_end": x_substrate}
 if P["substrate"] == "rough":
     import random
-    rng = random.Random(1000003 * int(P["seed"]) + 17)
+    substrate_rng = random.Random(1000003 * int(P["seed"]) + 17)
     row_pitch = math.sqrt(3.0) * R
-    y0 = rng.uniform(0.0, row_pitch)
-    x0 = rng.uniform(0.0, d)
-    rows = int(math.ceil((W + 2 * d) / row_pitch)) + 1
-    for j in range(rows):
+    y0 = substrate_rng.uniform(0.0, row_pitch)
+    x0 = substrate_rng.uniform(0.0, d)
+    for j in range(int(math.ceil((W + 2 * d) / row_pitch)) + 1):
         yc = -d + y0 + j * row_pitch
         if yc > W + R:
             break
-        xc = x_lo + x0 + (0.5 * d if j % 2 else 0.0)
-        while xc < x_hi:
-            zc = -R - rng.uniform(0.0, P["substrate_jitter"] * R)
-            O.bodies.append(utils.sphere((xc, yc, zc), R, fixed=True, material=frict, mask=SUBSTRATE_MASK))
-            substrate["positions"].append([xc, yc, zc])
-            substrate["radii"].append(R)
-            xc += d
+        substrate["rows"].append([yc, x_substrate + x0 + (0.5 * d if j % 2 else 0.0)])  # y, next x to lay
 elif P["substrate"] != "flat":
     log("REFUSED: substrate %r is neither 'flat' nor 'rough'" % P["substrate"])
     sys.exit(EXIT_REFUSED)
+
+
+def extend_substrate(x_to):
+    """Lay the rough substrate up to x_to (never beyond the floor's end)."""
+    x_to = min(x_to, x_hi)
+    while substrate["x_end"] < x_to:
+        chunk_end = substrate["x_end"] + 10.0 * d
+        for row in substrate["rows"]:
+            while row[1] < chunk_end:
+                zc = -R - substrate_rng.uniform(0.0, P["substrate_jitter"] * R)
+                O.bodies.append(utils.sphere((row[1], row[0], zc), R, fixed=True, material=frict, mask=SUBSTRATE_MASK))
+                substrate["positions"].append([row[1], row[0], zc])
+                substrate["radii"].append(R)
+                row[1] += d
+        substrate["x_end"] = chunk_end
+
+
+if P["substrate"] == "rough":
+    extend_substrate(L + P["substrate_ahead"] * d)
 temporary_walls = [
     O.bodies.append(utils.box((xc, 0.5 * W, 0.5 * P["cloud_height"]), (d, 0.5 * W, 0.5 * P["cloud_height"] + d),
                               fixed=True, material=smooth))
@@ -404,6 +422,8 @@ def control():
             state["snapshots"]["blade_start"] = snapshot()
     elif phase == "move":
         x = blade_rear_x()
+        if P["substrate"] == "rough" and x + tb + L + P["substrate_ahead"] * d > substrate["x_end"]:
+            extend_substrate(x + tb + L + P["substrate_ahead"] * d + 10.0 * d)
         if "window_start" not in state["snapshots"]:
             steady = steady_test(x)
             if x >= x_window_start or steady:
@@ -471,7 +491,7 @@ raw = {
                "x_cap": x_window_cap, "closed_by": state.get("window_closed_by"),
                "opened_by": state.get("window_opened_by"),
                "target_passed": P.get("target_passed")},
-    "substrate": substrate,
+    "substrate": {"positions": substrate["positions"], "radii": substrate["radii"]},
     "geometry": {"floor_top": floor_top, "width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
                  "floor_x": [x_lo, x_hi], "pile_length": L},
     "peak_overlap_ratio": state["peak_overlap_ratio"],
