@@ -38,7 +38,7 @@ rule all:
         "results/convergence/summary.json",
         "results/convergence/sampling_study.csv",
         "results/surrogate/model.joblib",
-        "results/surrogate/predictions.csv",
+        prediction_targets(),
         "results/maps/sensitivity_ranking_table.csv",
         expand("results/pictures/{name}.png", name=PICTURES.get("cases", [])),
         expand("results/vtk/{name}", name=PICTURES.get("vtk", [])),

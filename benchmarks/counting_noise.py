@@ -5,14 +5,15 @@ cases run with several packing seeds per cell (default: the published fidelity s
 docs/fidelity/cases_presets.csv; cells = preset x point).
 
 Per cell: seed SD of MFR and PD, N = MFR x h x W x window / sphere volume (W and the window from
-the preset in config.yaml, in d; for PD the published box was the window), c = relative SD x
+the preset of the config the cases ran with, `--run-config`, default docs/fidelity/config.yaml;
+for PD the published box was the window), c = relative SD x
 sqrt(N) with its 90 % chi-square interval; pooled c over the cells; Bartlett's test (scipy) that c
 is the same in every cell (the residuals (value / cell mean - 1) x sqrt(N) have equal variances).
 No raw snapshots are needed (the table's MFR gives N); N at a preset is an estimate from the mean
 MFR, not each case's own count.
 
     .venv/bin/python benchmarks/counting_noise.py
-    .venv/bin/python benchmarks/counting_noise.py --cases other_cases.csv --config config.yaml
+    .venv/bin/python benchmarks/counting_noise.py --cases other_cases.csv --run-config its_config.yaml
 """
 from __future__ import annotations
 
@@ -35,15 +36,18 @@ from spreadmap.metrics import counting_constant, pooled_constant  # noqa: E402
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", default=str(ROOT / "docs" / "fidelity" / "cases_presets.csv"))
-    ap.add_argument("--config", default=str(ROOT / "config.yaml"))
+    ap.add_argument("--run-config", default=str(ROOT / "docs" / "fidelity" / "config.yaml"),
+                    help="the config the cases ran with (their presets' bed width and window)")
+    ap.add_argument("--config", default=str(ROOT / "config.yaml"), help="where metrics.counting_noise_c is read")
     args = ap.parse_args(argv)
     config = spreadmap_config.load(args.config)
+    run_config = spreadmap_config.load(args.run_config)
     cases = pd.read_csv(args.cases)
-    cells = counting_constant(cases, config["presets"])
+    cells = counting_constant(cases, run_config["presets"])
     pd.set_option("display.width", 200)
     show = ["preset", "name", "d_um", "h_um", "seeds", "mfr_mean", "mfr_rel_sd", "n_mfr", "c_mfr", "c_mfr_lo", "c_mfr_hi",
             "pd_mean", "pd_rel_sd", "c_pd", "c_pd_lo", "c_pd_hi"]
-    print(f"cases: {args.cases} ({len(cases)} rows, {len(cells)} cells)")
+    print(f"cases: {args.cases} ({len(cases)} rows, {len(cells)} cells); presets of {args.run_config}")
     print(cells[show].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
     print(f"configured c (metrics.counting_noise_c): {config['metrics']['counting_noise_c']}")
     ok = cases[(cases["status"] == "ok") & ~cases["flagged"].fillna(False).astype(bool)]

@@ -17,7 +17,7 @@ try:
 except spreadmap_config.ConfigError as error:
     raise WorkflowError(f"spreadmap: bad configuration: {error}") from None
 
-RETRIES = 1  # a case that produced nothing (crash, timeout) is tried once more, then recorded as failed
+RETRIES = 1  # a crash or a timeout is tried once more, then recorded as failed (a refusal: at once)
 CASES = {}  # case id -> scene parameters of the YADE script
 SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list of (case id, label)
 RANGES = config.get("ranges")
@@ -79,6 +79,8 @@ for _i, _p in enumerate(_points):
 # The fidelity study (`snakemake fidelity`): its own two sets, outside the main job. A knob value
 # is a preset of its own (spreadmap.fidelity_plan), added to the presets here.
 FIDELITY_SETS = ("fidelity", "knobs")
+FIDELITY = config.get("fidelity") or {}
+KNOBS = FIDELITY.get("knobs") or {}
 if config.get("fidelity"):
     config["presets"].update(knob_presets(config))
     for _i, _row in enumerate(preset_cases(config)):
@@ -105,6 +107,19 @@ def final_converge_step(wildcards):
 
 def case_files(set_name, filename):
     return [f"results/cases/{cid}/{filename}" for cid, _ in SETS.get(set_name, [])]
+
+
+def prediction_targets():
+    """The surrogate's predictions at the chosen points: asked for only when there are points."""
+    return ["results/surrogate/predictions.csv"] if _points else []
+
+
+def fidelity_outputs(wildcards):
+    """Everything `snakemake fidelity` makes; a clear error without a `fidelity:` section."""
+    if not FIDELITY:
+        raise WorkflowError("spreadmap: `snakemake fidelity` needs a `fidelity:` section in the config "
+                            "(points, presets, seeds, reference; see the shipped config.yaml)")
+    return list(rules.fidelity_analysis.output)
 
 
 def set_tables():

@@ -1,7 +1,6 @@
 # The fidelity study: every reference point at every preset and seed, and the knob sweeps
 # (config `fidelity:`). `snakemake fidelity` runs it; nothing of the main job depends on it.
-FIDELITY = config.get("fidelity") or {}
-KNOBS = FIDELITY.get("knobs") or {}
+# (FIDELITY, KNOBS and fidelity_outputs: rules/common.smk)
 
 
 rule fidelity_tables:
@@ -36,13 +35,6 @@ rule fidelity_analysis:
         "../envs/analysis.yaml"
     script:
         "../scripts/fidelity.py"
-
-
-def fidelity_outputs(wildcards):
-    if not FIDELITY:
-        raise WorkflowError("spreadmap: `snakemake fidelity` needs a `fidelity:` section in the config "
-                            "(points, presets, seeds, reference; see the shipped config.yaml)")
-    return list(rules.fidelity_analysis.output)
 
 
 rule fidelity:

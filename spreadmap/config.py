@@ -44,7 +44,25 @@ def _describe(error: jsonschema.ValidationError) -> str:
     if validator == "required":
         return f"config key '{key}': {error.message}"
     rule = allowed.get(validator, lambda s: f"valid per the schema rule '{validator}'")(error.schema)
-    return f"config key '{key}': value {error.instance!r} is not allowed; it must be {rule}"
+    message = f"config key '{key}': value {error.instance!r} is not allowed; it must be {rule}"
+    if validator == "type" and _yaml_float(error.instance):
+        message += f" (YAML 1.1 reads {error.instance} as a string: write {_yaml_float(error.instance)})"
+    return message
+
+
+def _yaml_float(value) -> str | None:
+    """How to write a number that YAML 1.1 (PyYAML) read as a string because its exponent has no
+    sign or its mantissa no dot (2.1e9 -> 2.1e+9, 1e-6 -> 1.0e-6); None for anything else."""
+    if not isinstance(value, str) or "e" not in value.lower():
+        return None
+    try:
+        float(value)
+    except ValueError:
+        return None
+    mantissa, exponent = value.strip().lower().split("e")
+    mantissa = mantissa if "." in mantissa else mantissa + ".0"
+    exponent = exponent if exponent[:1] in "+-" else "+" + exponent
+    return f"{mantissa}e{exponent}"
 
 
 def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:

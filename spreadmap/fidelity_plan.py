@@ -12,7 +12,7 @@ import copy
 
 # The keys of a preset the knob sweeps may turn.
 KNOBS = ("width_d", "heap_height_d", "pile_length_min_d", "heap_reserve", "transient_d", "window_d",
-         "dt_factor", "density_scale")
+         "dt_factor", "density_scale", "target_cv")
 
 
 def value_token(value: float) -> str:

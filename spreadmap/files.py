@@ -1,26 +1,45 @@
-"""Atomic file writes: write beside the target, then rename over it, so that a reader (or a run
-killed half-way) never sees a partial file."""
+"""Atomic, durable file writes: write beside the target, flush it to disk (fsync), rename it over
+the target, then flush the folder (so the rename itself survives a power cut). A reader, a run
+killed half-way or a machine that loses power never sees a partial or empty file: it sees the
+old file or the new one."""
 from __future__ import annotations
 
 import os
+import uuid
 from contextlib import contextmanager
 from pathlib import Path
 
 
+def fsync_path(path: Path | str) -> None:
+    """Flush a file's (or a folder's) data and metadata to disk."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
 @contextmanager
 def atomic_path(path: Path | str):
-    """Yield a temporary path beside `path`; on success it replaces `path` in one rename."""
+    """Yield a temporary path beside `path` to write to; on success it is flushed to disk and
+    replaces `path` in one rename (then the folder is flushed). On an error it is removed and
+    `path` is left as it was."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    # unique per process and call (two threads of one process never share it); a dot file, so
+    # that globs of the folder's results do not see it
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
     try:
         yield tmp
+        fsync_path(tmp)
         os.replace(tmp, path)
+        fsync_path(path.parent)
     finally:
         if tmp.exists():
             tmp.unlink()
 
 
-def write_text_atomically(path: Path | str, text: str) -> None:
+def write_text_atomically(path: Path | str, text: str, encoding: str = "utf-8") -> None:
     with atomic_path(path) as tmp:
-        tmp.write_text(text)
+        with open(tmp, "w", encoding=encoding, newline="\n") as fh:
+            fh.write(text)

@@ -7,8 +7,9 @@ hang inside YADE, out of reach of the in-run watchdog."""
 from __future__ import annotations
 
 import json
-import resource
 import os
+import re
+import resource
 import shutil
 import signal
 import subprocess
@@ -18,7 +19,11 @@ from pathlib import Path
 
 from .files import atomic_path, write_text_atomically
 
+# Exit codes of yade_scripts/spreading_case.py. Its own verdicts (refused before running, failed a
+# check, blown up) are deterministic: the same case gives the same verdict. Any other code is a
+# crash ("crashed"), which like a timeout may not recur and is worth another attempt.
 EXIT_CODES = {0: "ok", 2: "refused", 3: "blown", 4: "failed"}
+RETRIED_OUTCOMES = ("crashed", "timeout")
 
 
 def yade_executable() -> str:
@@ -54,17 +59,15 @@ def run_case(script: Path | str, raw_out: Path | str, log_path: Path | str, time
                                 env=clean_environment(), cwd=str(raw_out.parent), start_new_session=True)
         try:
             code = proc.wait(timeout=timeout_s)
-            reason = ""
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-            code, reason = None, f"timed out after {timeout_s:.0f} s wall time (outer timeout); killed"
-            log.write(f"\n[launcher] {reason}\n")
-    outcome = "timeout" if code is None else EXIT_CODES.get(code, "failed")
-    if code not in (None, 0, 3):
-        reason = f"yade exited with code {code} ({outcome}); see {log_path}"
+            code = None
+            log.write(f"\n[launcher] {failure_head(code, 'timeout', timeout_s)}\n")
+    outcome = "timeout" if code is None else EXIT_CODES.get(code, "crashed")
     if outcome in ("ok", "blown") and not raw_out.exists():
-        outcome, reason = "failed", f"yade exited {code} but wrote no raw result; see {log_path}"
+        outcome = "crashed"
+    reason = "" if outcome in ("ok", "blown") else failure_reason(code, outcome, log_path, timeout_s)
     cpu_end = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu_time = (cpu_end.ru_utime - cpu_start.ru_utime) + (cpu_end.ru_stime - cpu_start.ru_stime)
     return {"exit_code": code, "outcome": outcome, "wall_time": time.time() - start, "cpu_time": cpu_time,
@@ -115,9 +118,47 @@ def log_tail(log_path: Path | str, lines: int = 15) -> str:
         return ""
 
 
+_CASE_PREFIX = re.compile(r"^\[[^\]]*\]\s*")
+
+
+def log_verdict(log_path: Path | str) -> str:
+    """The line of a case's log that says why it stopped: the YADE script's own verdict
+    (REFUSED: / FAILED: ...), else the last line YADE wrote (a traceback's error, the last
+    progress line before a timeout). Without the case id prefix; "" for an empty log."""
+    lines = [line.strip() for line in log_tail(log_path, lines=200).splitlines()]
+    lines = [line for line in lines if line and not line.startswith(("[launcher]", "$ "))]
+    lines = [_CASE_PREFIX.sub("", line) for line in lines]
+    verdicts = [line for line in lines if line.startswith(("REFUSED:", "FAILED:"))]
+    return (verdicts or lines or [""])[-1]
+
+
+def failure_head(exit_code: int | None, outcome: str, timeout_s: float | None = None) -> str:
+    if outcome == "timeout":
+        return f"timed out after {timeout_s:.0f} s wall time (outer timeout); killed"
+    if outcome == "crashed" and exit_code in (0, 3):
+        return f"yade exited {exit_code} but wrote no raw result"
+    return f"yade exited with code {exit_code} ({outcome})"
+
+
+def failure_reason(exit_code: int | None, outcome: str, log_path: Path | str, timeout_s: float | None = None) -> str:
+    """One line for the tables and the run summary: what happened, the log's own verdict (why),
+    and where the log is."""
+    why = log_verdict(log_path)
+    head = failure_head(exit_code, outcome, timeout_s)
+    return f"{head}: {why} (log: {log_path})" if why else f"{head} (log: {log_path})"
+
+
+def retry_wanted(result: dict, attempt: int, retries: int) -> bool:
+    """Whether a run that produced no result is worth another attempt: a crash or a timeout may
+    not recur; the YADE script's own verdicts (refused, failed) would. `attempt` counts from 1."""
+    return result["outcome"] in RETRIED_OUTCOMES and attempt <= retries
+
+
 def failure_record(params: dict, result: dict, log_path: Path | str) -> dict:
-    """The raw record of a case that produced no result (crash, timeout, refusal)."""
-    return {"format": "spreadmap-raw-1", "status": "failed", "reason": result["reason"] or result["outcome"],
+    """The raw record of a case that produced no result (refusal, failed check, crash, timeout):
+    status "refused" for a refusal, else "failed", with the reason and the log's tail."""
+    status = "refused" if result["outcome"] == "refused" else "failed"
+    return {"format": "spreadmap-raw-1", "status": status, "reason": result["reason"] or result["outcome"],
             "params": params, "wall_time": result["wall_time"], "exit_code": result["exit_code"],
             "log_tail": log_tail(log_path)}
 

@@ -71,7 +71,13 @@ def chosen_points(points_config: dict | None, base_dir=".") -> list[dict]:
                     raise ValueError(f"points CSV {path}, row {i + 2}: {k} = {row[k]!r} is not a positive number")
                 point[k] = float(value)
             preset = row.get("preset") if "preset" in table.columns and isinstance(row.get("preset"), str) else None
-            seed = int(row["seed"]) if "seed" in table.columns and pd.notna(row.get("seed")) else None
+            seed = None
+            if "seed" in table.columns and pd.notna(row.get("seed")):
+                value = pd.to_numeric(row["seed"], errors="coerce")
+                if not (np.isfinite(value) and value >= 0 and float(value).is_integer()):
+                    raise ValueError(f"points CSV {path}, row {i + 2}: seed = {row['seed']} is not allowed; "
+                                     "a packing seed is an integer >= 0 (YADE seeds a negative one from the clock)")
+                seed = int(value)
             name = str(row["name"]) if "name" in table.columns and pd.notna(row.get("name")) else f"{path.stem}_{i}"
             out.append({"name": name, "point": point, "preset": preset, "seed": seed})
     return out

@@ -23,6 +23,26 @@ def rayleigh_time_step(radius: float, density: float, young: float, poisson: flo
     return math.pi * radius * math.sqrt(density / shear) / (0.1631 * poisson + 0.8766)
 
 
+def hertz_contact_time(radius: float, density: float, material: dict, speed: float) -> float:
+    """Duration of an elastic Hertz impact of two equal spheres at relative speed `speed`:
+    2.868 (m*^2 / (R* E*^2 v))^(1/5), with m* = m/2, R* = R/2, E* = E / (2 (1 - nu^2))
+    (Johnson, Contact Mechanics, 1985, sec. 11.4). Damping (e < 1) lengthens it a little."""
+    mass = density * 4.0 / 3.0 * math.pi * radius ** 3
+    e_star = material["young_pa"] / (2.0 * (1.0 - material["poisson"] ** 2))
+    return 2.868 * ((0.5 * mass) ** 2 / (0.5 * radius * e_star ** 2 * speed)) ** 0.2
+
+
+def precision_target(preset: dict, config: dict) -> float | None:
+    """Spheres that must pass under the blade in the window for the relative SD of MFR the preset
+    asks for (`target_cv`): counting noise c / sqrt(N) (config metrics.counting_noise_c), so
+    N = (c / target_cv)^2. None when the preset has a fixed window."""
+    cv = preset.get("target_cv")
+    if cv is None:
+        return None
+    c = config.get("metrics", {}).get("counting_noise_c", 0.45)
+    return math.ceil((c / cv) ** 2)
+
+
 def time_step(diameter: float, density: float, material: dict, preset: dict, preset_name: str) -> tuple[float, float]:
     """(time step, critical step) for a case; refuses a forced step above the critical one."""
     critical = rayleigh_time_step(0.5 * diameter, density, material["young_pa"], material["poisson"])
@@ -63,10 +83,23 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # The heap ahead of the blade must outlast the window: it holds `heap_reserve` times the most
     # solid the gap can take (a layer of height h at the densest packing) while the blade travels
     # the transient, the window and its own thickness.
-    need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + window + blade)
+    sphere_volume = math.pi * d ** 3 / 6.0
+    target = precision_target(preset, config)
+    if target is None:
+        need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + window + blade)
+        window_cap = window
+        window_expected = window
+    else:
+        # The whole pile is sized by what will pass: the target's spheres plus what passes in the
+        # transient and under the blade at a generous MFR, times a margin (not the densest
+        # packing); expressed per unit width, as the heap-reserve rule above, over the pile's height
+        mfr_high = scene["mfr_expected_max"]
+        need = scene["pile_margin"] * (target * sphere_volume / width + mfr_high * h * (transient + blade))
+        need *= heap / (h + heap)  # the whole pile, not only its heap above the gap, is the reserve
+        window_cap = max(window, preset["window_max_d"] * d)
+        window_expected = min(window_cap, max(window, target * sphere_volume / (scene["mfr_expected"] * h * width)))
     pile_length = max(preset["pile_length_min_d"] * d, need / (packing * heap))
     pile_height = h + heap
-    sphere_volume = math.pi * d ** 3 / 6.0
     n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))
     # makeCloud keeps sphere centres one radius inside the box: size the cloud on that inner box
     # so that it holds n_particles at `cloud_fraction` (it silently places fewer when too tight).
@@ -75,14 +108,20 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
 
     settle_max = scene["settle_time_factor"] * math.sqrt(2.0 * cloud_height / g)
     relax_max = scene["relax_time_factor"] * math.sqrt(2.0 * pile_height / g)
-    move_time = (blade + pile_length + transient + window) / v
+    move_time = (blade + pile_length + transient + window_expected) / v
     steps = (settle_max + relax_max + move_time) / dt
+    longest_steps = (settle_max + relax_max + (blade + pile_length + transient + window_cap) / v) / dt
     rolling = scene.get("rolling_resistance", {})
     # rolling stiffness: stiffness_factor x (Hertz normal stiffness at an overlap of 1e-3 R) x R^2
     r = 0.5 * d
     e_star = material["young_pa"] / (2.0 * (1.0 - material["poisson"] ** 2))
     k_n = 2.0 * e_star * math.sqrt(0.5 * r * 1e-3 * r)
-    timeout = preset.get("timeout_s") or 60.0 + scene["timeout_factor"] * n_particles * steps / 2.0e6
+    timeout = preset.get("timeout_s") or 60.0 + scene["timeout_factor"] * n_particles * longest_steps / 2.0e6
+    substrate = scene.get("substrate", {})
+    # the fastest impact expected: the fall of the cloud's top onto the pile, or a sphere thrown
+    # ahead of the blade at a few times its speed
+    impact_speed = max(math.sqrt(2.0 * g * cloud_height), 4.0 * v)
+    contact = hertz_contact_time(0.5 * d, density, material, impact_speed)
     return {
         "case_id": case_id,
         "point": {k: float(point[k]) for k in ("f", "d_um", "h_um", "v_mm_s")},
@@ -123,4 +162,20 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "estimated_steps": int(steps),
         "timeout_s": float(timeout),
         "stop_after": None,
+        "substrate": substrate.get("kind", "flat"),
+        "substrate_jitter": float(substrate.get("jitter", 0.5)),
+        "substrate_ahead": float(substrate.get("ahead_d", 12.0)),
+        # the peak overlap is read every overlap_every steps: an eighth of the shortest contact
+        # expected, so that a sampled value is within cos(pi/16) = 98 % of an impact's peak
+        "overlap_every": max(1, int(contact / (8.0 * dt))),
+        "contact_time": contact,
+        "target_passed": None if target is None else float(target),
+        "window_max_travel": window_cap,
+        "floor_ahead": float(scene.get("floor_ahead_d", 40.0)),
+        # the window opens once the flow is steady, at least steady_min_d beyond the pile (None:
+        # after the fixed transient_d), comparing the flow over two spans of steady_span_d
+        "steady_min_travel": None if preset.get("steady_min_d") is None else preset["steady_min_d"] * d,
+        "steady_span": float(scene.get("steady_span_d", 2.0)) * d,
+        "steady_z": float(scene.get("steady_z", 2.0)),
+        "counting_noise_c": float(config.get("metrics", {}).get("counting_noise_c", 0.45)),
     }

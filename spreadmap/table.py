@@ -1,6 +1,7 @@
-"""The results table: one row per case (parameters, MFR, PD, regime, diagnostics, preset, wall
-time and peak memory from Snakemake's benchmark, then the case's noise estimate and its layer
-quality), and the run summary built from it."""
+"""The results table: one row per case (parameters, MFR, PD, regime, flags, the reason a case did
+not finish (with its log's verdict), diagnostics, preset, wall time and peak memory from
+Snakemake's benchmark, then the case's noise estimate and its layer quality), and the run
+summary built from it."""
 from __future__ import annotations
 
 import json
@@ -13,7 +14,7 @@ from .files import atomic_path
 from .metrics import NEW_COLUMNS
 
 FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
-                 "mfr", "pd", "regime", "flagged", "flag_reason"]
+                 "mfr", "pd", "regime", "flagged", "flag_reason", "reason"]
 # after every other column (added later than the rest): noise estimate and layer quality
 LAST_COLUMNS = list(NEW_COLUMNS)
 

@@ -289,6 +289,10 @@ def build_case_figure(raw: dict, colour_by: str = "speed"):
     table = sphere_table(raw, moments)
     cv = _case_values(raw)
     pt = cv["point"]
+    substrate = raw.get("substrate") or {}
+    sub_pos = np.asarray(substrate.get("positions") or np.zeros((0, 3)), float).reshape(-1, 3) * UM
+    sub_rad = np.asarray(substrate.get("radii") or [], float) * UM
+    d = cv["d_um"] or 30.0
     title = (f"Powder spreading, case {cv['case_id']}\n"
              f"f = {_fmt_num(pt.get('f'))},  d = {_fmt_num(pt.get('d_um'))} µm,  h = {_fmt_num(pt.get('h_um'))} µm"
              + (f" (h/d = {pt['h_um'] / pt['d_um']:.2f})" if pt.get("h_um") and pt.get("d_um") else "")
@@ -413,7 +417,14 @@ def build_case_figure(raw: dict, colour_by: str = "speed"):
         # floor (where it exists) and side walls
         f_lo, f_hi = cv["floor_um"] if cv["floor_um"] else (x0, x1)
         _hatch(ax_s, max(x0, f_lo), min(x1, f_hi), z0, 0.0)
-        ax_s.plot([max(x0, f_lo), min(x1, f_hi)], [0, 0], color="black", lw=1.2, zorder=3)
+        if len(sub_pos):  # a rough substrate: its fixed spheres in grey, their tops at z <= 0
+            seen = (sub_pos[:, 0] > x0 - d) & (sub_pos[:, 0] < x1 + d)
+            ax_s.add_collection(PatchCollection([Circle((x, z), r) for x, z, r in
+                                                 zip(sub_pos[seen, 0], sub_pos[seen, 2], sub_rad[seen])],
+                                                facecolor="0.78", edgecolor="0.55", linewidths=0.4, zorder=1.5,
+                                                gid=f"substrate:{m}:side"))
+        else:
+            ax_s.plot([max(x0, f_lo), min(x1, f_hi)], [0, 0], color="black", lw=1.2, zorder=3)
         _hatch(ax_t, x0, x1, y0, 0.0)
         _hatch(ax_t, x0, x1, width, y1)
         ax_t.axhline(0.0, color="black", lw=1.0, zorder=3)
@@ -471,6 +482,8 @@ def build_case_figure(raw: dict, colour_by: str = "speed"):
     handles = handles if blade_drawn else []
     handles.append(Patch(facecolor="0.93", edgecolor="0.55", hatch="////",
                          label="floor (z < 0) / side walls (y = 0, width)"))
+    if len(sub_pos):
+        handles.append(Patch(facecolor="0.78", edgecolor="0.55", label="rough substrate (fixed spheres, tops at z <= 0)"))
     if "window_end" in moments and win_start is not None and win_end is not None:
         handles.append(Line2D([], [], color=pd_colour, lw=1.2, ls=(0, (3, 2)), label="PD sampling box"))
     legend_top = y_cursor - row_gap + 0.22

@@ -12,7 +12,7 @@ import pytest
 
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import case_id, rounded
-from spreadmap.dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
+from dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 from spreadmap.launcher import run_case
 from spreadmap.files import write_text_atomically
 from spreadmap.render import render

@@ -33,7 +33,8 @@ def test_bad_values_are_refused_with_the_key_named(raw_config, change, message):
 
 def test_the_shipped_config_is_valid_and_defaults_are_filled(raw_config):
     cfg = validate(copy.deepcopy(raw_config))
-    assert cfg["scene"]["cloud_fraction"] == 0.25  # a default from the schema
+    assert "settle_time_factor" not in raw_config["scene"]
+    assert cfg["scene"]["settle_time_factor"] == 4  # a default from the schema
 
 
 @pytest.mark.parametrize("overrides,message", [
@@ -47,3 +48,31 @@ def test_workflow_refuses_bad_config_before_anything_runs(tmp_path, overrides, m
     assert result.returncode != 0
     assert message in result.stdout + result.stderr
     assert not (wf / "results").exists()
+
+
+@pytest.mark.parametrize("text,written", [("2.1e9", "2.1e+9"), ("1e-6", "1.0e-6")])
+def test_a_number_yaml_reads_as_a_string_is_explained(raw_config, text, written):
+    """PyYAML (YAML 1.1) reads 2.1e9 and 1e-6 as strings; the message names the key and says how
+    to write the number so that YAML reads it as one (checked by reading that back)."""
+    raw_config["material"]["young_pa"] = yaml.safe_load(f"young_pa: {text}")["young_pa"]
+    assert raw_config["material"]["young_pa"] == text  # what YAML really does
+    with pytest.raises(ConfigError) as error:
+        validate(copy.deepcopy(raw_config))
+    message = str(error.value)
+    assert message == (f"config key 'material.young_pa': value '{text}' is not allowed; it must be of type number "
+                       f"(YAML 1.1 reads {text} as a string: write {written})")
+    assert "\n" not in message and isinstance(yaml.safe_load(f"x: {written}")["x"], float)
+
+
+@pytest.mark.parametrize("change,key", [
+    (lambda c: c["scene"].update(seed=-1), r"scene\.seed"),
+    (lambda c: c["fidelity"].update(seeds=[1, -1]), r"fidelity\.seeds\[1\]"),
+    (lambda c: c["fidelity"]["knobs"].update(seeds=[-2, 1]), r"fidelity\.knobs\.seeds\[0\]"),
+    (lambda c: c["points"]["named"]["normal"].update(seed=-1), r"points\.named\.normal\.seed"),
+])
+def test_a_negative_packing_seed_is_refused(raw_config, change, key):
+    """YADE's makeCloud seeds from the clock for a negative seed (not reproducible); 0 and up are
+    reproducible in this build (tests/test_packing_seed_yade.py)."""
+    change(raw_config)
+    with pytest.raises(ConfigError, match=key + r"': value -\d is not allowed; it must be >= 0"):
+        validate(copy.deepcopy(raw_config))

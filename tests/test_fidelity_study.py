@@ -62,9 +62,14 @@ def test_a_knob_preset_changes_only_what_its_knob_drives(shipped):
     dt = scene_parameters(point, "default_dt_factor_0p15", cfg, "x")
     assert dt["time_step"] == pytest.approx(0.5 * base["time_step"])
     assert dt["n_particles"] == base["n_particles"]
-    wide = scene_parameters(point, "default_width_d_8", cfg, "x")
-    assert wide["width"] == pytest.approx(8 / 5 * base["width"])
-    assert wide["n_particles"] == pytest.approx(8 / 5 * base["n_particles"], rel=0.02)
+    wide = scene_parameters(point, "default_width_d_16", cfg, "x")
+    assert wide["width"] == pytest.approx(16 / 10 * base["width"])
+    # the pile holds what must pass: a wider bed makes it shorter; only what passes in the transient
+    # grows with the width (a pile of fixed length would hold 16/10 as many spheres)
+    assert wide["pile_length"] < base["pile_length"]
+    assert base["n_particles"] < wide["n_particles"] < 1.25 * base["n_particles"]
+    precise = scene_parameters(point, "default_target_cv_0p015", cfg, "x")
+    assert precise["target_passed"] == math.ceil((0.45 / 0.015) ** 2)  # (c / cv)^2 spheres, c = 0.45
     heavy = scene_parameters(point, "default_density_scale_100", cfg, "x")
     assert heavy["time_step"] == pytest.approx(base["time_step"] / math.sqrt(10))
 

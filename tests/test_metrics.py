@@ -312,15 +312,20 @@ def test_a_patchy_deposit_is_short_feed_whatever_its_flow():
     assert m["n_passed"] == pytest.approx(10.0, rel=1e-12)
 
 
-def test_substrate_spheres_are_not_powder():
+def test_a_rough_substrate_below_z0_is_not_powder():
+    """The substrate is recorded apart (raw["substrate"]); powder spheres sunk into its pockets
+    (centres below R) count above z = 0 only: the layer's solid is what lies above the plane."""
     raw = raw_record(layers=1)
-    for snap in raw["snapshots"].values():
-        n = len(snap["positions"])
-        snap["positions"] += [[x * DIAM, 2 * DIAM, -0.5 * DIAM] for x in range(25)]  # fixed layer below z = 0
-        snap["radii"] += [0.5 * DIAM] * 25
-        snap["substrate"] = [False] * n + [True] * 25
-    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
-    assert m["mfr"] == pytest.approx(math.pi / 6 / 2) and m["n_passed"] == pytest.approx(40.0)
+    raw["substrate"] = {"positions": [[x * DIAM, 2 * DIAM, -0.5 * DIAM] for x in range(25)], "radii": [0.5 * DIAM] * 25}
+    base = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    assert base["mfr"] == pytest.approx(math.pi / 6 / 2) and base["n_passed"] == pytest.approx(40.0)
+    for snap in raw["snapshots"].values():  # sink the whole layer by R/2 into the substrate
+        snap["positions"] = (np.asarray(snap["positions"]) - [0, 0, 0.25 * DIAM]).tolist()
+    sunk = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    assert sunk["mfr"] == base["mfr"]  # MFR is volume across the blade plane, whatever the height
+    below = slab(0.5, -0.5, -0.25) / BALL  # share of each sphere below z = 0
+    assert sunk["pd"] == pytest.approx(base["pd"] * (1 - below), rel=1e-12)
+    assert sunk["thickness_ratio"] == pytest.approx(base["thickness_ratio"] - 0.25 * base["coverage"] / 2, rel=3e-3)
 
 
 def test_within_case_noise_from_the_behind_series():

@@ -34,10 +34,12 @@ def hertz_contact_time(m_eff, r_eff, speed):
 @pytest.mark.parametrize("mode", ["pair", "wall"])
 @pytest.mark.parametrize("speed", [0.01, 0.3])
 def test_restitution_is_0_4(tmp_path, mode, speed):
-    """YADE 2023.02a's en = 0.4 gives e = 0.4 in a two-body collision, at any impact speed
-    (Hertz with this damping is speed-independent): measured 0.3996, no calibration needed."""
+    """YADE's en = 0.4 gives e = 0.4 in a two-body collision, at any impact speed (Hertz with this
+    damping is speed-independent): measured 0.39965-0.39975 on 2023.02a, within the README's 0.1 %;
+    no calibration needed."""
     result = collide(tmp_path, mode, 0.4, speed)
-    assert result["restitution_measured"] == pytest.approx(0.4, rel=0.05)
+    print(f"{mode} at {speed} m/s: e = {result['restitution_measured']:.6f}")
+    assert result["restitution_measured"] == pytest.approx(0.4, rel=0.001)
 
 
 @pytest.mark.parametrize("speed", [0.01, 0.3])
@@ -45,8 +47,11 @@ def test_elastic_contact_time_matches_hertz(tmp_path, speed):
     radius = 25e-6
     mass = RHO * 4.0 / 3.0 * math.pi * radius ** 3
     result = collide(tmp_path, "pair", 1.0, speed, radius)
-    assert result["restitution_measured"] == pytest.approx(1.0, abs=0.01)
-    assert result["contact_time"] == pytest.approx(hertz_contact_time(mass / 2, radius / 2, speed), rel=0.05)
+    print(f"elastic pair at {speed} m/s: e = {result['restitution_measured']:.6f}, contact time / Hertz = "
+          f"{result['contact_time'] / hertz_contact_time(mass / 2, radius / 2, speed):.6f}")
+    assert result["restitution_measured"] == pytest.approx(1.0, abs=0.001)
+    # measured 1.0005 and 0.9986 of Hertz: within the README's 0.2 %
+    assert result["contact_time"] == pytest.approx(hertz_contact_time(mass / 2, radius / 2, speed), rel=0.002)
 
 
 def test_sphere_box_contact_is_hertz_with_half_radius(tmp_path):
@@ -56,8 +61,11 @@ def test_sphere_box_contact_is_hertz_with_half_radius(tmp_path):
     radius, speed = 25e-6, 0.1
     mass = RHO * 4.0 / 3.0 * math.pi * radius ** 3
     result = collide(tmp_path, "wall", 1.0, speed, radius)
-    assert result["contact_time"] == pytest.approx(hertz_contact_time(mass, radius / 2, speed), rel=0.05)
-    assert result["contact_time"] / hertz_contact_time(mass, radius, speed) == pytest.approx(2 ** 0.2, rel=0.02)
+    print(f"elastic wall: contact time / Hertz(R/2) = {result['contact_time'] / hertz_contact_time(mass, radius / 2, speed):.6f}, "
+          f"/ Hertz(R) = {result['contact_time'] / hertz_contact_time(mass, radius, speed):.6f}")
+    assert result["contact_time"] == pytest.approx(hertz_contact_time(mass, radius / 2, speed), rel=0.002)
+    # measured 1.1488 against 2^(1/5) = 1.1487
+    assert result["contact_time"] / hertz_contact_time(mass, radius, speed) == pytest.approx(2 ** 0.2, rel=0.002)
 
 
 def test_poured_bed_packs_between_0_55_and_0_64(tmp_path, config):

@@ -1,5 +1,7 @@
-"""The fidelity study published in docs/fidelity/ (the README's numbers) is the study the shipped
-config plans, and its tables are what the package computes from its published cases."""
+"""The fidelity study published in docs/fidelity/ (the README's numbers) is the study its own
+config (docs/fidelity/config.yaml, the configuration it ran with: the study's flat floor and fixed
+window, before the precision scene) plans, and its tables are what the package computes from its
+published cases."""
 import copy
 
 import numpy as np
@@ -17,7 +19,7 @@ DOCS = ROOT / "docs" / "fidelity"
 
 @pytest.fixture(scope="module")
 def shipped():
-    cfg = spreadmap_config.load(ROOT / "config.yaml")
+    cfg = spreadmap_config.load(DOCS / "config.yaml")
     cfg["presets"].update(plan.knob_presets(copy.deepcopy(cfg)))
     return cfg
 

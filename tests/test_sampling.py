@@ -56,3 +56,17 @@ def test_lattice_corners_and_spacing():
 def test_lattice_needs_two_points():
     with pytest.raises(ValueError, match="k >= 2"):
         lattice(1)
+
+
+def test_points_csv_seed_column_takes_reproducible_seeds_only(tmp_path):
+    """The CSV's packing seed follows the schema's rule for every other packing seed: an integer
+    >= 0 (makeCloud seeds a negative one from the clock; 0 is reproducible in this build)."""
+    from spreadmap.sampling import chosen_points
+
+    good = tmp_path / "good.csv"
+    good.write_text("name,f,d_um,h_um,v_mm_s,seed\na,0.3,30,65,10,0\nb,0.3,30,65,10,\nc,0.3,30,65,10,7\n")
+    assert [p["seed"] for p in chosen_points({"csv": "good.csv"}, tmp_path)] == [0, None, 7]
+    for bad in ("-1", "1.5", "x"):
+        (tmp_path / "bad.csv").write_text(f"f,d_um,h_um,v_mm_s,seed\n0.3,30,65,10,1\n0.3,30,65,10,{bad}\n")
+        with pytest.raises(ValueError, match=rf"row 3: seed = .*{bad}.* is not allowed; a packing seed is an integer >= 0"):
+            chosen_points({"csv": "bad.csv"}, tmp_path)

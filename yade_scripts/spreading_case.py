@@ -31,6 +31,7 @@ from yade import (Bo1_Box_Aabb, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Bo
                   InsertionSortCollider, InteractionLoop,
                   Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin,
                   NewtonIntegrator, PyRunner)
+import yade._utils
 import yade.config
 
 # --- case parameters (written by spreadmap's renderer; the values below are a demo case) ---
@@ -70,6 +71,17 @@ PARAMS = {
     "rolling_friction": 0.0,
     "rolling_stiffness": 0.0,
     "stop_after": None,
+    "substrate": "flat",
+    "substrate_jitter": 0.5,
+    "overlap_every": 1,
+    "target_passed": None,
+    "window_max_travel": 0.00032,
+    "floor_ahead": 40.0,
+    "substrate_ahead": 12.0,
+    "steady_min_travel": None,
+    "steady_span": 8e-05,
+    "steady_z": 2.0,
+    "counting_noise_c": 0.45,
 }
 # --- end of case parameters ---
 
@@ -117,10 +129,17 @@ W = P["width"]
 L = P["pile_length"]
 h = P["gap"]
 tb = P["blade_thickness"]
-x_window_start = L + P["transient_travel"]          # blade rear face positions
-x_window_end = x_window_start + P["window_travel"]
+# Blade rear face positions. The window opens after the blade has swept the pile and a transient
+# (transient_travel); with steady_min_travel set, it opens earlier, as soon as the flow under the
+# blade is steady (steady_test), transient_travel being then the cap. It lasts window_travel; with a
+# target it goes on until target_passed spheres' worth of volume has passed, up to window_max_travel.
+x_window_start = L + P["transient_travel"]          # at the latest
+adaptive_window = P.get("target_passed") is not None
+window_longest = P["window_max_travel"] if adaptive_window else P["window_travel"]
+x_window_cap = x_window_start + window_longest      # the farthest the blade can go
+x_window_end = x_window_start + P["window_travel"]  # reset when the window opens
 x_lo = -tb - 20.0 * d                                # modelled length of the floor
-x_hi = x_window_end + L + 40.0 * d
+x_hi = x_window_cap + L + P["floor_ahead"] * d
 z_hi = P["cloud_height"] + 40.0 * d
 sphere_volume = math.pi * d ** 3 / 6.0
 mass = P["density"] * sphere_volume
@@ -138,9 +157,59 @@ O.materials.append(smooth)
 cx, span = 0.5 * (x_lo + x_hi), 0.5 * (x_hi - x_lo)
 # floor (friction f, like the powder) and the two frictionless side walls: boxes whose inner
 # faces are at z = 0, y = 0 and y = W.
-O.bodies.append(utils.box((cx, 0.5 * W, -d), (span, 0.5 * W + 2 * d, d), fixed=True, material=frict))
+# Collision masks: the powder (3) meets everything; the rough substrate and the floor under it (6)
+# meet the powder but not one another (the collider's avoidSelfInteractionMask 4): fixed bodies
+# never interact, and no potential interaction between them costs a step. Blade and walls: 1.
+POWDER_MASK, SUBSTRATE_MASK, AVOID_MASK = 3, 6, 4
+floor_top = -d if P["substrate"] == "rough" else 0.0   # under a rough substrate, a backstop
+O.bodies.append(utils.box((cx, 0.5 * W, floor_top - d), (span, 0.5 * W + 2 * d, d), fixed=True, material=frict,
+                          mask=SUBSTRATE_MASK if P["substrate"] == "rough" else 1))
 for yc in (-d, W + d):
     O.bodies.append(utils.box((cx, yc, 0.5 * z_hi), (span, d, 0.5 * z_hi + d), fixed=True, material=smooth))
+# A rough substrate (the previous layer): fixed spheres of the powder's diameter on a hexagonal
+# lattice (seeded offset, rows along x), each lowered by a seeded random depth in
+# [0, substrate_jitter x R], so that their highest points lie in [-jitter R, 0]: z = 0 is the top of
+# the substrate, the reference of the gap h and of every layer metric. The flat floor box stays
+# below it (its face at z = -d; a sphere of the powder cannot pass between touching substrate spheres).
+# Fixed spheres cost time in every step, so the substrate is laid only as far as the powder
+# reaches: to substrate_ahead beyond the pile's far end, and extended in steps of 10 d as the blade
+# advances (extend_substrate, from control()); the lattice and its random depths are the same
+# whenever they are laid.
+x_substrate = -tb - 4.0 * d  # behind the blade's start only what the collapsing pile can reach
+substrate = {"positions": [], "radii": [], "rows": [], "x_end": x_substrate}
+if P["substrate"] == "rough":
+    import random
+    substrate_rng = random.Random(1000003 * int(P["seed"]) + 17)
+    row_pitch = math.sqrt(3.0) * R
+    y0 = substrate_rng.uniform(0.0, row_pitch)
+    x0 = substrate_rng.uniform(0.0, d)
+    for j in range(int(math.ceil((W + 2 * d) / row_pitch)) + 1):
+        yc = -d + y0 + j * row_pitch
+        if yc > W + R:
+            break
+        substrate["rows"].append([yc, x_substrate + x0 + (0.5 * d if j % 2 else 0.0)])  # y, next x to lay
+elif P["substrate"] != "flat":
+    log("REFUSED: substrate %r is neither 'flat' nor 'rough'" % P["substrate"])
+    sys.exit(EXIT_REFUSED)
+
+
+def extend_substrate(x_to):
+    """Lay the rough substrate up to x_to (never beyond the floor's end)."""
+    x_to = min(x_to, x_hi)
+    while substrate["x_end"] < x_to:
+        chunk_end = substrate["x_end"] + 10.0 * d
+        for row in substrate["rows"]:
+            while row[1] < chunk_end:
+                zc = -R - substrate_rng.uniform(0.0, P["substrate_jitter"] * R)
+                O.bodies.append(utils.sphere((row[1], row[0], zc), R, fixed=True, material=frict, mask=SUBSTRATE_MASK))
+                substrate["positions"].append([row[1], row[0], zc])
+                substrate["radii"].append(R)
+                row[1] += d
+        substrate["x_end"] = chunk_end
+
+
+if P["substrate"] == "rough":
+    extend_substrate(L + P["substrate_ahead"] * d)
 temporary_walls = [
     O.bodies.append(utils.box((xc, 0.5 * W, 0.5 * P["cloud_height"]), (d, 0.5 * W, 0.5 * P["cloud_height"] + d),
                               fixed=True, material=smooth))
@@ -155,6 +224,8 @@ if placed != int(P["n_particles"]):
         "lower the config key scene.cloud_fraction" % (placed, P["n_particles"], P["cloud_height"] * 1e6))
     sys.exit(EXIT_FAILED)
 sphere_ids = list(cloud.toSimulation(material=frict))
+for i in sphere_ids:
+    O.bodies[i].mask = POWDER_MASK
 
 # Hertz normal, Mindlin tangential with the Coulomb cap; viscous damping set by YADE from the
 # restitution coefficient (en, es); rolling resistance (ScGeom6D geometry) only when asked for.
@@ -170,12 +241,13 @@ if P["rolling_resistance"]:
 newton = NewtonIntegrator(gravity=(0, 0, -P["gravity"]), damping=P["settle_damping"])
 O.engines = [
     ForceResetter(),
-    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()]),
+    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()], avoidSelfInteractionMask=AVOID_MASK),
     InteractionLoop(geometry_functors, [ip2], [law]),
     newton,
     PyRunner(command="watchdog()", iterPeriod=int(P["watchdog_every"])),
     PyRunner(command="control()", iterPeriod=int(P["control_every"])),
     PyRunner(command="monitor()", iterPeriod=int(P["monitor_every"])),
+    PyRunner(command="record_overlap()", iterPeriod=int(P["overlap_every"])),
 ]
 
 state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": None,
@@ -272,8 +344,47 @@ def monitor():
         state["behind_series"].append([O.time, x, volume_behind(x)])
 
 
+def record_overlap():
+    """The peak sphere-sphere overlap / R (YADE's C++ maxOverlapRatio: u_N over the reduced radius
+    2 r1 r2 / (r1 + r2), = R for equal spheres), every overlap_every steps: a step short against the
+    shortest impact (the renderer sets it from Hertz's contact duration at the fastest expected
+    impact), so no impact's peak is missed. Contacts with boxes (flat floor, blade, walls) are
+    checked by monitor() only."""
+    overlap = yade._utils.maxOverlapRatio()
+    if overlap > state["peak_overlap_ratio"]:
+        state["peak_overlap_ratio"] = overlap
+    by_phase = state["peak_overlap_by_phase"]
+    if overlap > by_phase.get(state["phase"], 0.0):
+        by_phase[state["phase"]] = overlap
+
+
 def kinetic_energy_settled():
     return utils.kineticEnergy() < P["ke_tolerance"] * ke_scale
+
+
+def steady_test(x):
+    """Is the flow under the blade steady? Once the blade is steady_min_travel beyond the pile, the
+    spheres' worth of volume passed over the last two spans of travel (n1, then n2) must agree
+    within steady_z counting-noise SDs: |n2 - n1| <= z c sqrt(n1 + n2), c the counting-noise
+    constant (relative SD c / sqrt(N)). Reads the passed volume at every control step."""
+    if P.get("steady_min_travel") is None:
+        return False
+    series = state.setdefault("approach_series", [])
+    series.append((x, volume_behind(x)))
+    if x < L + P["steady_min_travel"] or x - series[0][0] < 2.0 * P["steady_span"]:
+        return False
+
+    def passed_at(xq):  # the last record at or before xq
+        best = series[0][1]
+        for xi, vi in series:
+            if xi > xq:
+                break
+            best = vi
+        return best
+
+    v0, v1, v2 = passed_at(x - 2.0 * P["steady_span"]), passed_at(x - P["steady_span"]), series[-1][1]
+    n1, n2 = (v1 - v0) / sphere_volume, (v2 - v1) / sphere_volume
+    return n1 > 0 and n2 > 0 and abs(n2 - n1) <= P["steady_z"] * P["counting_noise_c"] * math.sqrt(n1 + n2)
 
 
 def start_phase(name):
@@ -283,6 +394,7 @@ def start_phase(name):
 
 
 def control():
+    global x_window_end, x_window_cap
     phase, elapsed = state["phase"], O.time - state["phase_start"]
     if phase == "settle":
         if (elapsed > 0.2 * P["settle_max_time"] and kinetic_energy_settled()) or elapsed > P["settle_max_time"]:
@@ -310,19 +422,40 @@ def control():
             state["snapshots"]["blade_start"] = snapshot()
     elif phase == "move":
         x = blade_rear_x()
-        if "window_start" not in state["snapshots"] and x >= x_window_start:
-            state["snapshots"]["window_start"] = snapshot()
-            log("measurement window opens at t = %.4g s" % O.time)
-        elif "window_middle" not in state["snapshots"] and x >= 0.5 * (x_window_start + x_window_end):
+        if P["substrate"] == "rough" and x + tb + L + P["substrate_ahead"] * d > substrate["x_end"]:
+            extend_substrate(x + tb + L + P["substrate_ahead"] * d + 10.0 * d)
+        if "window_start" not in state["snapshots"]:
+            steady = steady_test(x)
+            if x >= x_window_start or steady:
+                x_window_end = x + P["window_travel"]
+                x_window_cap = x + window_longest
+                state["window_opened_by"] = "steady flow" if steady else "transient cap"
+                state["snapshots"]["window_start"] = snapshot()
+                state["window_start_volume"] = volume_behind(x)
+                log("measurement window opens at t = %.4g s, blade %.1f d beyond the pile (%s)"
+                    % (O.time, (x - L) / d, state["window_opened_by"]))
+        elif adaptive_window:
+            passed = (volume_behind(x) - state["window_start_volume"]) / sphere_volume
+            if "window_middle" not in state["snapshots"] and passed >= 0.5 * P["target_passed"]:
+                state["snapshots"]["window_middle"] = snapshot()
+            if x >= x_window_end and (passed >= P["target_passed"] or x >= x_window_cap):
+                state["window_closed_by"] = "target" if passed >= P["target_passed"] else "travel cap"
+                if "window_middle" not in state["snapshots"]:
+                    state["snapshots"]["window_middle"] = snapshot()
+                state["snapshots"]["window_end"] = snapshot()
+                monitor()
+                finish("ok")
+        elif "window_middle" not in state["snapshots"] and x >= x_window_end - 0.5 * P["window_travel"]:
             state["snapshots"]["window_middle"] = snapshot()
         elif "window_middle" in state["snapshots"] and x >= x_window_end:
+            state["window_closed_by"] = "travel"
             state["snapshots"]["window_end"] = snapshot()
             monitor()
             finish("ok")
     now = time.time()
     if now - state["last_progress"] >= P["progress_every_s"]:
         state["last_progress"] = now
-        travel = ("blade %.1f of %.1f d " % ((blade_rear_x() + tb) / d, (x_window_end + tb) / d)
+        travel = ("blade %.1f of %.1f d " % ((blade_rear_x() + tb) / d, (x_window_cap + tb) / d)
                   if phase == "move" else "")
         total = " of ~%d" % P["estimated_steps"] if P.get("estimated_steps") else ""
         log("progress %s phase=%s t=%.4g s steps=%d%s %swall=%.0f s"
@@ -354,8 +487,12 @@ raw = {
     "settled_by_time": state.get("settled_by_time"),
     "relaxed_by_time": state.get("relaxed_by_time"),
     "move_start": state["move_start"],
-    "window": {"x_start": x_window_start, "x_end": x_window_end},
-    "geometry": {"width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
+    "window": {"x_start": (state["snapshots"].get("window_start") or {}).get("blade_rear_x", x_window_start), "x_end": (state["snapshots"].get("window_end") or {}).get("blade_rear_x", x_window_end),
+               "x_cap": x_window_cap, "closed_by": state.get("window_closed_by"),
+               "opened_by": state.get("window_opened_by"),
+               "target_passed": P.get("target_passed")},
+    "substrate": {"positions": substrate["positions"], "radii": substrate["radii"]},
+    "geometry": {"floor_top": floor_top, "width": W, "gap": h, "blade_thickness": tb, "blade_top": state.get("settled_top", 0.0) + 10.0 * d,
                  "floor_x": [x_lo, x_hi], "pile_length": L},
     "peak_overlap_ratio": state["peak_overlap_ratio"],
     "peak_overlap_by_phase": state["peak_overlap_by_phase"],  # settle (the fall), relax, move (spreading)

@@ -22,14 +22,9 @@ SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batch
 
 
 def powder(snapshot: dict) -> tuple[np.ndarray, np.ndarray]:
-    """Positions (n, 3) and radii (n,) of the powder spheres of a snapshot (a fixed substrate's
-    spheres, if the snapshot marks them in a boolean list `substrate`, are left out)."""
-    pos = np.asarray(snapshot["positions"], float).reshape(-1, 3)
-    rad = np.asarray(snapshot["radii"], float)
-    if "substrate" in snapshot:
-        keep = ~np.asarray(snapshot["substrate"], bool)
-        pos, rad = pos[keep], rad[keep]
-    return pos, rad
+    """Positions (n, 3) and radii (n,) of the spheres of a snapshot: the powder (a rough
+    substrate's fixed spheres are recorded apart, in the raw record's `substrate`)."""
+    return np.asarray(snapshot["positions"], float).reshape(-1, 3), np.asarray(snapshot["radii"], float)
 
 
 def _powder_snapshot(snapshot: dict) -> dict:

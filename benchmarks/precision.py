@@ -1,0 +1,319 @@
+#!/usr/bin/env python
+"""Information per CPU-second of one DEM case, 1 / (CV^2 x CPU s), for three scenes run interleaved:
+
+  today      the scene and `default` preset of an earlier revision (--today-rev, the scene as it
+             landed before the precision work: flat floor, fixed window);
+  physics    this tree's scene with the new physics (config.yaml's scene: rough substrate) but the
+             old fixed-window `default` preset (5 d bed, 6 d pile, 8 d window after a 3 d transient);
+  precision  this tree as shipped: the new physics and the `default` preset sized by its precision
+             target (target_cv), the steady-flow window and the pile sized by what passes.
+
+CV is the seed-to-seed relative SD of MFR (and PD) at a design point; CPU s the mean CPU time of
+the YADE process per case. The points are eight design points spanning the space (the corners
+d = 10 um / h = 75 um and d = 50 um / h = 55 um among them), each with --seeds packing seeds; the
+jobs are interleaved (point by point, seed by seed, every arm's case queued before the next seed)
+so that the machine's load falls on every arm alike. Each case is rendered by its own tree's
+spreadmap (a subprocess with that tree on PYTHONPATH) and run by this tree's launcher; MFR, PD and
+the per-case noise estimate are computed from every raw result by this tree's spreadmap.metrics.
+
+Prints a table per point and the ratios against `today` with bootstrap 95 % intervals (seeds
+resampled within each point), and writes one row per case (--csv) and the summary (--summary).
+`--recompute DIR` re-reads a kept run's raw results instead of running anything.
+
+    .venv/bin/python benchmarks/precision.py --seeds 1 2 3 4 --keep /tmp/precision --csv docs/precision/cases.csv \
+        --summary docs/precision/summary.md
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import multiprocessing
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+POINTS = {  # f, d_um, h_um, v_mm_s: the four fidelity points, the two corners, two more
+    "normal": (0.30, 30, 65, 10),
+    "narrow_gap_large": (0.45, 50, 55, 5),
+    "small_diameter": (0.30, 20, 60, 15),
+    "low_friction_fast": (0.15, 40, 75, 15),
+    "coarse_thick_slow": (0.15, 50, 75, 5),
+    "narrow_fast": (0.40, 25, 55, 15),
+    "middle": (0.22, 35, 70, 7),
+    "fine_thick_corner": (0.30, 10, 75, 10),  # last: the costliest case of today's scene
+}
+OLD_DEFAULT = {"width_d": 5, "heap_height_d": 10, "pile_length_min_d": 6, "heap_reserve": 1.5, "transient_d": 3,
+               "window_d": 8, "dt_factor": 0.3, "density_scale": 1000, "target_cv": None, "steady_min_d": None}
+OLD_SETTLE = {"cloud_fraction": 0.25, "relax_time_factor": 1.5}
+FIDELITY_POINTS = ["normal", "narrow_gap_large", "small_diameter", "low_friction_fast"]
+ARMS = {
+    "today": {"rev": "2e05ec5", "overrides": {}},
+    "physics": {"rev": None, "overrides": {"presets": {"default": OLD_DEFAULT}, "scene": OLD_SETTLE}},
+    "precision": {"rev": None, "overrides": {}},
+    # the same-seed check that the cheaper settle and relax move neither MFR nor PD beyond the noise
+    "precision_slow_settle": {"rev": None, "overrides": {"scene": OLD_SETTLE}, "points": FIDELITY_POINTS},
+}
+CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", "cpu_time", "wall_time", "n_particles",
+               "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "peak_overlap_ratio", "flagged", "case_dir"]
+
+RENDER = r"""
+import json, sys
+from spreadmap import config as cfgmod
+from spreadmap.cases import rounded
+from spreadmap.render import render, template_sha256
+from spreadmap.scene import scene_parameters
+job = json.loads(sys.argv[1])
+cfg = cfgmod.load(job["config"])
+def update(base, new):
+    for k, v in new.items():
+        if isinstance(v, dict) and isinstance(base.get(k), dict):
+            update(base[k], v)
+        else:
+            base[k] = v
+update(cfg, job["overrides"])
+point = dict(zip(("f", "d_um", "h_um", "v_mm_s"), job["point"]))
+params = {**scene_parameters(rounded(point), "default", cfg, job["case_id"], job["seed"]), "scene_sha256": template_sha256()}
+params["preset"] = "default"
+open(job["script"], "w").write(render(params))
+json.dump(params, open(job["params"], "w"))
+"""
+
+
+def tree_of(rev: str | None, base: Path) -> Path:
+    """This tree, or revision `rev` of this repository extracted under `base`."""
+    if rev is None:
+        return ROOT
+    out = base / f"tree-{rev}"
+    if not out.exists():
+        out.mkdir(parents=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "spreadmap", "yade_scripts", "schemas",
+                                  "config.yaml"], check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(out)], input=archive, check=True)
+    return out
+
+
+def build_jobs(arms: list[str], points: list[str], seeds: list[int], base: Path) -> list[dict]:
+    jobs = []
+    for name in points:
+        for seed in seeds:
+            for arm in arms:
+                if name not in ARMS[arm].get("points", POINTS):
+                    continue
+                tree = tree_of(ARMS[arm]["rev"], base)
+                case_dir = base / "cases" / f"{arm}-{name}-s{seed}"
+                jobs.append({"arm": arm, "point_name": name, "point": POINTS[name], "seed": seed, "tree": str(tree),
+                             "config": str(tree / "config.yaml"), "overrides": ARMS[arm]["overrides"],
+                             "case_id": f"{arm}-{name}-s{seed}", "case_dir": str(case_dir),
+                             "script": str(case_dir / "case.py"), "params": str(case_dir / "params.json")})
+    return jobs
+
+
+def run_job(job: dict) -> dict:
+    from spreadmap.launcher import run_case
+
+    case_dir = Path(job["case_dir"])
+    case_dir.mkdir(parents=True, exist_ok=True)
+    env = {**os.environ, "PYTHONPATH": job["tree"]}
+    subprocess.run([sys.executable, "-c", RENDER, json.dumps(job)], env=env, check=True, cwd=job["tree"])
+    params = json.loads(Path(job["params"]).read_text())
+    raw_path = case_dir / "raw.json"
+    raw_path.unlink(missing_ok=True)
+    # a generous outer limit: a benchmark on a busy machine must not lose its slowest cases
+    result = run_case(job["script"], raw_path, case_dir / "run.log", 4.0 * params["timeout_s"])
+    (case_dir / "result.json").write_text(json.dumps(result))
+    return result
+
+
+def case_row(job: dict, config: dict) -> dict:
+    """One row from a case directory's raw result, with this tree's metrics."""
+    from spreadmap.metrics import case_metrics
+
+    case_dir = Path(job["case_dir"])
+    row = {"arm": job["arm"], "point": job["point_name"], "seed": job["seed"],
+           **dict(zip(("f", "d_um", "h_um", "v_mm_s"), job["point"])), "case_dir": str(case_dir)}
+    result = json.loads((case_dir / "result.json").read_text()) if (case_dir / "result.json").exists() else {}
+    raw_path = case_dir / "raw.json"
+    row.update(status=result.get("outcome", "missing"), cpu_time=result.get("cpu_time", math.nan),
+               wall_time=result.get("wall_time", math.nan))
+    if raw_path.exists():
+        raw = json.loads(raw_path.read_text())
+        raw["params"].setdefault("point", dict(zip(("f", "d_um", "h_um", "v_mm_s"), job["point"])))
+        m = case_metrics({**raw, "cpu_time": row["cpu_time"]}, config["regime"], config["stability"])
+        for key in ("n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "peak_overlap_ratio", "flagged"):
+            row[key] = m.get(key, math.nan)
+        if not math.isfinite(row.get("n_passed", math.nan)):
+            s1, s2 = raw["snapshots"]["window_start"], raw["snapshots"]["window_end"]
+            from spreadmap.metrics import passed_volume
+            row["n_passed"] = (passed_volume(s2) - passed_volume(s1)) / (math.pi * raw["params"]["diameter"] ** 3 / 6)
+    return row
+
+
+def information(rows: list[dict], target: str) -> dict:
+    """Per point: mean, seed SD, CV, mean CPU, information per CPU-second."""
+    values = np.array([r[target] for r in rows], float)
+    cpu = np.array([r["cpu_time"] for r in rows], float)
+    mean, sd = values.mean(), values.std(ddof=1)
+    cv = sd / mean
+    return {"n": len(rows), "mean": mean, "sd": sd, "cv": cv, "cpu": cpu.mean(), "info": 1.0 / (cv ** 2 * cpu.mean()),
+            "recorded_sd": np.nanmean([r.get(f"{target}_sd", math.nan) for r in rows]),
+            "n_passed": np.nanmean([r.get("n_passed", math.nan) for r in rows])}
+
+
+def bootstrap_ratio(by_point: dict, arm: str, target: str, n_boot: int = 2000, seed: int = 0):
+    """Mean over points of info(arm) / info(today), with a 95 % interval from resampling seeds
+    within each point and arm."""
+    rng = np.random.default_rng(seed)
+    points = sorted(by_point)
+
+    def ratio(sample):
+        out = []
+        for p in points:
+            a, t = sample(by_point[p][arm]), sample(by_point[p]["today"])
+            out.append(information(a, target)["info"] / information(t, target)["info"])
+        return float(np.mean(out)), out
+
+    point_estimate, per_point = ratio(lambda rows: rows)
+    boots = []
+    for _ in range(n_boot):
+        def sample(rows):
+            picks = [rows[i] for i in rng.integers(0, len(rows), len(rows))]
+            vals = [r[target] for r in picks]
+            return picks if np.std(vals) > 0 else rows  # a degenerate draw (all one case) has no CV
+        boots.append(ratio(sample)[0])
+    lo, hi = np.percentile(boots, [2.5, 97.5])
+    return point_estimate, lo, hi, dict(zip(points, per_point))
+
+
+def report(rows: list[dict], arms: list[str]) -> str:
+    ok = [r for r in rows if r["status"] == "ok" and math.isfinite(r.get("mfr", math.nan))]
+    by_point: dict = {}
+    for r in ok:
+        by_point.setdefault(r["point"], {}).setdefault(r["arm"], []).append(r)
+    complete = {p: d for p, d in by_point.items()
+                if all(len(d.get(a, [])) >= 2 for a in arms if p in ARMS[a].get("points", POINTS))}
+    lines = [f"# Information per CPU-second: {', '.join(arms)}", "",
+             f"{len(ok)} of {len(rows)} cases ok; points with every arm: {len(complete)}.", ""]
+    for target in ("mfr", "pd"):
+        lines += [f"## {target.upper()}", "",
+                  "| point | arm | seeds | mean | seed SD | CV | recorded SD / seed SD | N passed | CPU s | info / CPU s |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for p in sorted(complete):
+            for a in arms:
+                if a not in complete[p]:
+                    continue
+                s = information(complete[p][a], target)
+                rec = s["recorded_sd"] / s["sd"] if math.isfinite(s["recorded_sd"]) else math.nan
+                lines.append(f"| {p} | {a} | {s['n']} | {s['mean']:.4f} | {s['sd']:.4f} | {s['cv']:.3f} | "
+                             f"{rec:.2f} | {s['n_passed']:.0f} | {s['cpu']:.1f} | {s['info']:.3g} |")
+        lines += [""]
+        for a in arms:
+            if a == "today":
+                continue
+            with_arm = {p: d for p, d in complete.items() if a in d}
+            if not with_arm:
+                continue
+            est, lo, hi, per = bootstrap_ratio(with_arm, a, target)
+            lines.append(f"- **{a} / today, {target.upper()}**: mean over points {est:.2f}x "
+                         f"(95 % bootstrap interval {lo:.2f}-{hi:.2f}); per point: "
+                         + ", ".join(f"{p} {v:.2f}" for p, v in sorted(per.items())))
+        lines += [""]
+    if "precision_slow_settle" in arms and "precision" in arms:
+        lines += ["## The cheaper settle and relax, same seeds (precision against precision_slow_settle)", "",
+                  "| point | target | cheaper | old settle | difference | SE of the difference | CPU ratio |",
+                  "|---|---|---|---|---|---|---|"]
+        for p in sorted(complete):
+            a, b = complete[p].get("precision", []), complete[p].get("precision_slow_settle", [])
+            if len(a) < 2 or len(b) < 2:
+                continue
+            for target in ("mfr", "pd"):
+                va, vb = np.array([r[target] for r in a]), np.array([r[target] for r in b])
+                se = math.sqrt(va.var(ddof=1) / len(va) + vb.var(ddof=1) / len(vb))
+                cpu_ratio = np.mean([r["cpu_time"] for r in a]) / np.mean([r["cpu_time"] for r in b])
+                lines.append(f"| {p} | {target.upper()} | {va.mean():.4f} | {vb.mean():.4f} | "
+                             f"{va.mean() - vb.mean():+.4f} | {se:.4f} | {cpu_ratio:.2f} |")
+        lines += [""]
+    cpu = {a: [r["cpu_time"] for r in ok if r["arm"] == a] for a in arms}
+    lines += ["## CPU per case", "", "| arm | cases | median CPU s | max CPU s | total CPU h |", "|---|---|---|---|---|"]
+    for a in arms:
+        if cpu[a]:
+            lines.append(f"| {a} | {len(cpu[a])} | {np.median(cpu[a]):.1f} | {max(cpu[a]):.1f} | {sum(cpu[a]) / 3600:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--arms", nargs="+", default=list(ARMS), choices=list(ARMS))
+    ap.add_argument("--points", nargs="+", default=list(POINTS), choices=list(POINTS))
+    ap.add_argument("--seeds", nargs="+", type=int, default=[1, 2, 3, 4])
+    ap.add_argument("--today-rev", default=ARMS["today"]["rev"], help="revision of the `today` arm")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--keep", help="directory for the cases (default: a temporary one, removed)")
+    ap.add_argument("--recompute", help="a kept directory: recompute the tables from its raw results, run nothing")
+    ap.add_argument("--csv", help="one row per case")
+    ap.add_argument("--summary", help="the Markdown summary")
+    args = ap.parse_args(argv)
+    ARMS["today"]["rev"] = args.today_rev
+    from spreadmap import config as cfgmod
+    from spreadmap.machine import description_lines
+
+    config = cfgmod.load(ROOT / "config.yaml")
+    print("\n".join(description_lines()), flush=True)
+    tmp = None
+    if args.recompute:
+        base = Path(args.recompute).resolve()
+    elif args.keep:
+        base = Path(args.keep).resolve()
+        base.mkdir(parents=True, exist_ok=True)
+    else:
+        tmp = tempfile.TemporaryDirectory(prefix="spreadmap-precision-")
+        base = Path(tmp.name)
+    jobs = build_jobs(args.arms, args.points, args.seeds, base)
+    if not args.recompute:
+        print(f"{len(jobs)} cases: {len(args.points)} points x seeds {args.seeds} x arms {args.arms}, interleaved; "
+              f"{args.workers} YADE processes at once, in {base}", flush=True)
+        start = time.perf_counter()
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=args.workers, mp_context=context) as pool:
+            futures = {pool.submit(run_job, job): job for job in jobs
+                       if not (Path(job["case_dir"]) / "result.json").exists()}  # a kept run resumes
+            for done, future in enumerate(as_completed(futures), 1):
+                job = futures[future]
+                try:
+                    result = future.result()
+                    print(f"[{done}/{len(futures)}] {job['case_id']}: {result.get('outcome')}, cpu "
+                          f"{result.get('cpu_time', math.nan):.1f} s", flush=True)
+                except Exception as error:
+                    print(f"[{done}/{len(futures)}] {job['case_id']}: launcher error {error}", flush=True)
+        print(f"ran in {time.perf_counter() - start:.0f} s wall", flush=True)
+    rows = [case_row(job, config) for job in jobs]
+    text = report(rows, args.arms)
+    print(text)
+    if args.csv:
+        Path(args.csv).parent.mkdir(parents=True, exist_ok=True)
+        with open(args.csv, "w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS, extrasaction="ignore")
+            writer.writeheader()
+            for r in rows:
+                writer.writerow({**r, "case_dir": Path(r["case_dir"]).name})
+    if args.summary:
+        Path(args.summary).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.summary).write_text(text)
+    if tmp is not None:
+        tmp.cleanup()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

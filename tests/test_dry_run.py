@@ -1,0 +1,50 @@
+"""The main job's DAG on real Snakemake, planned without running anything (`snakemake -n`), and
+the workflow's lint. Cheap: no YADE, a few seconds each."""
+import re
+import subprocess
+
+from conftest import ROOT, SNAKEMAKE, make_workflow, planned_jobs, snakemake
+
+DROP = ("points", "pictures")  # the tests give their own
+
+
+def test_main_job_plans_without_chosen_points(tmp_path):
+    """With no chosen points there is nothing to predict: the main job plans without the predict
+    job (which would fail on an empty list of points) and still trains the surrogate."""
+    wf = make_workflow(tmp_path, {"points": {"named": {}}, "pictures": {"cases": [], "vtk": []}}, DROP)
+    dry = snakemake(wf, "-n")
+    assert dry.returncode == 0, dry.stderr[-3000:]
+    jobs = planned_jobs(dry.stdout)
+    assert "predict" not in jobs and "results/surrogate/predictions.csv" not in dry.stdout
+    assert jobs["surrogate"] == 1 and jobs["all"] == 1
+
+
+def test_main_job_predicts_the_chosen_points(tmp_path):
+    wf = make_workflow(tmp_path, {"points": {"named": {"one": {"f": 0.3, "d_um": 30, "h_um": 65, "v_mm_s": 10}}},
+                                  "pictures": {"cases": [], "vtk": []}}, DROP)
+    dry = snakemake(wf, "-n")
+    assert dry.returncode == 0, dry.stderr[-3000:]
+    assert planned_jobs(dry.stdout)["predict"] == 1
+
+
+def test_lint_is_clean():
+    """`snakemake --lint` on the shipped workflow reports nothing (the README says so)."""
+    lint = subprocess.run([SNAKEMAKE, "--lint"], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    out = lint.stdout + lint.stderr
+    assert lint.returncode == 0 and "Lints for" not in out, out[-3000:]
+
+
+def test_the_stated_runtime_of_a_reference_case_is_what_snakemake_asks_for(tmp_path):
+    """The SLURM profile and the README tell a cluster user how long a reference case's job asks
+    for; the number is the one Snakemake plans (read from the dry run), not a stale estimate."""
+    point = {"f": 0.3, "d_um": 12, "h_um": 65, "v_mm_s": 10, "preset": "reference"}
+    wf = make_workflow(tmp_path, {"points": {"named": {"small": point}}, "pictures": {"cases": [], "vtk": []}}, DROP)
+    dry = snakemake(wf, "points", "-n")
+    assert dry.returncode == 0, dry.stderr[-3000:]
+    runtimes = {int(m) for m in re.findall(r"\bruntime=(\d+)\b", dry.stdout)}
+    assert len(runtimes) == 1, runtimes
+    minutes = runtimes.pop()
+    profile = " ".join(line.lstrip("# ") for line in (ROOT / "profiles" / "slurm" / "config.yaml").read_text().split("\n"))
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert f"fixed 2 h timeout asks for {minutes} min" in profile
+    assert f"so its jobs ask for {minutes} min" in readme

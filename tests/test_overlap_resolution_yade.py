@@ -1,0 +1,57 @@
+"""The stability record cannot miss an impact: the scene reads the peak overlap every
+`overlap_every` steps, an eighth of the shortest contact it expects (spreadmap.scene), and a Hertz
+impact sampled at that stride, at any phase, keeps its peak within 3 % of Hertz theory; sampled
+every 1000 steps (the old monitor) it is missed. Runs the real YADE binary."""
+import json
+import math
+import subprocess
+
+import pytest
+
+from spreadmap.launcher import clean_environment, yade_executable
+from spreadmap.scene import scene_parameters
+
+from conftest import ROOT
+
+pytestmark = pytest.mark.yade
+E, NU = 2.1e9, 0.3
+
+
+def impact_series(tmp_path, speed, radius, density, dt, restitution=1.0):
+    out = tmp_path / "impact.json"
+    subprocess.run([yade_executable(), "-n", "-j1", "-x", str(ROOT / "yade_scripts" / "check_impact_overlap.py"),
+                    str(out), str(restitution), str(speed), str(radius), str(density), str(E), str(NU), str(dt)],
+                   env=clean_environment(), check=True, capture_output=True, timeout=120)
+    return json.loads(out.read_text())["overlap_ratio_series"]
+
+
+def hertz_peak_overlap_ratio(speed, radius, density):
+    """Elastic impact of two equal spheres (Johnson 1985, sec. 11.4), written out by hand:
+    delta_max = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5), m* = m/2, R* = R/2, E* = E / (2 (1 - nu^2))."""
+    mass = density * 4.0 / 3.0 * math.pi * radius ** 3
+    e_star = E / (2.0 * (1.0 - NU ** 2))
+    delta = (15.0 * (mass / 2.0) * speed ** 2 / (16.0 * e_star * math.sqrt(radius / 2.0))) ** 0.4
+    return delta / radius
+
+
+def worst_sampled_peak(series, stride):
+    """The lowest peak a record reading every `stride` steps can see, over every phase."""
+    return min(max(series[offset::stride], default=0.0) for offset in range(stride))
+
+
+@pytest.mark.parametrize("d_um", [10, 50])
+def test_the_scene_stride_catches_the_peak_of_a_hertz_impact(tmp_path, config, d_um):
+    point = {"f": 0.3, "d_um": d_um, "h_um": 65, "v_mm_s": 15}
+    params = scene_parameters(point, "default", config, "impact")
+    # the fastest impact the scene expects: the fall from the cloud's top
+    speed = math.sqrt(2.0 * config["material"]["gravity_m_s2"] * params["cloud_height"])
+    radius = 0.5 * params["diameter"]
+    series = impact_series(tmp_path, speed, radius, params["density"], params["time_step"])
+    expected = hertz_peak_overlap_ratio(speed, radius, params["density"])
+    contact_steps = sum(1 for x in series if x > 0)
+    assert max(series) == pytest.approx(expected, rel=0.02)  # the per-step record is Hertz's peak
+    assert contact_steps >= 8 * params["overlap_every"]  # the stride is at most an eighth of the contact
+    assert worst_sampled_peak(series, params["overlap_every"]) >= 0.97 * expected
+    # the old record, every 1000 steps, can miss the impact altogether
+    assert worst_sampled_peak(series, 1000) < 0.5 * expected
+
