@@ -360,3 +360,24 @@ def test_peak_overlap_by_phase_columns():
     raw["peak_overlap_by_phase"] = {"settle": 0.03, "relax": 0.004, "move": 0.01}
     m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
     assert [m[f"peak_overlap_{p}"] for p in PHASES] == [0.03, 0.004, 0.01]
+
+
+def test_regime_probabilities_against_monte_carlo_and_the_plain_rule():
+    """Independent normal errors: the probabilities are the shares of classify() over draws."""
+    from spreadmap.metrics import regime_probabilities
+
+    rng = np.random.default_rng(6)
+    mean = (np.array([0.06, 0.3, 0.3]), np.array([0.9, 0.55, 0.8]), np.array([0.5, 0.5, 0.27]))
+    sd = (0.01, 0.05, 0.02)
+    got = regime_probabilities(mean[0], sd[0], mean[1], sd[1], mean[2], sd[2], RULES)
+    n = 100_000
+    draws = [m[:, None] + s * rng.normal(size=(3, n)) for m, s in zip(mean, sd)]
+    labels = classify(*draws, RULES)
+    for name in ("normal", "jamming", "short_feed"):
+        share = (labels == name).mean(axis=1)
+        assert np.all(np.abs(got[name] - share) < 4 * np.sqrt(share * (1 - share) / n) + 1e-4), (name, got[name], share)
+    np.testing.assert_allclose(sum(got.values()), 1.0, rtol=1e-12)
+    plain = regime_probabilities(mean[0], 0.0, mean[1], 0.0, mean[2], 0.0, RULES)
+    expected = classify(*mean, RULES)
+    for name in ("normal", "jamming", "short_feed"):
+        np.testing.assert_array_equal(plain[name], (expected == name).astype(float))

@@ -10,9 +10,9 @@ from .case import NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure, powd
 from .flow import layer_density, mass_flow_ratio, measured_span, passed_volume, sphere_volume, window_passed_volume
 from .layer import layer_quality, upper_envelope
 from .noise import batch_means_sd, counting_constant, counting_sd, pooled_constant
-from .regime import REGIMES, RULE_KEYS, classify
+from .regime import REGIMES, RULE_KEYS, classify, regime_probabilities
 
 __all__ = ["NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "batch_means_sd", "case_metrics", "classify",
            "counting_constant", "counting_sd", "layer_density", "layer_quality", "mass_flow_ratio", "measure",
-           "measured_span", "passed_volume", "pooled_constant", "powder", "sphere_volume", "upper_envelope",
+           "measured_span", "passed_volume", "pooled_constant", "powder", "regime_probabilities", "sphere_volume", "upper_envelope",
            "window_passed_volume"]
