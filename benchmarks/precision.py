@@ -65,8 +65,11 @@ ARMS = {
     # the same-seed check that the cheaper settle and relax move neither MFR nor PD beyond the noise
     "precision_slow_settle": {"rev": None, "overrides": {"scene": OLD_SETTLE}, "points": FIDELITY_POINTS},
 }
-CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", "cpu_time", "wall_time", "n_particles",
-               "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "peak_overlap_ratio", "flagged", "case_dir"]
+CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_packing",
+                "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",
+                "peak_overlap_relax", "peak_overlap_move", "rolled_off_particles", "flagged"]
+CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", "cpu_time", "wall_time",
+               *CASE_COLUMNS, "case_dir"]
 
 RENDER = r"""
 import json, sys
@@ -150,13 +153,10 @@ def case_row(job: dict, config: dict) -> dict:
     if raw_path.exists():
         raw = json.loads(raw_path.read_text())
         raw["params"].setdefault("point", dict(zip(("f", "d_um", "h_um", "v_mm_s"), job["point"])))
-        m = case_metrics({**raw, "cpu_time": row["cpu_time"]}, config["regime"], config["stability"])
-        for key in ("n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "peak_overlap_ratio", "flagged"):
+        # the PD box's clearance must fit every arm's window (today's: 8 d, a 2 d blade)
+        m = case_metrics({**raw, "cpu_time": row["cpu_time"]}, config["regime"], config["stability"], config["metrics"])
+        for key in CASE_COLUMNS:
             row[key] = m.get(key, math.nan)
-        if not math.isfinite(row.get("n_passed", math.nan)):
-            s1, s2 = raw["snapshots"]["window_start"], raw["snapshots"]["window_end"]
-            from spreadmap.metrics import passed_volume
-            row["n_passed"] = (passed_volume(s2) - passed_volume(s1)) / (math.pi * raw["params"]["diameter"] ** 3 / 6)
     return row
 
 

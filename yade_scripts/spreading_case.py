@@ -194,22 +194,28 @@ elif P["substrate"] != "flat":
 
 
 def extend_substrate(x_to):
-    """Lay the rough substrate up to x_to (never beyond the floor's end)."""
+    """Lay the rough substrate up to x_to (never beyond the floor's end). A sphere of the powder that
+    rolled beyond the substrate's end lies on the floor below it, where the next substrate spheres
+    go: no substrate sphere is laid within 2 R of one (the random depth is drawn all the same, so
+    the layout never depends on where the powder is)."""
     x_to = min(x_to, x_hi)
     while substrate["x_end"] < x_to:
         chunk_end = substrate["x_end"] + 10.0 * d
+        nearby = [b.state.pos for b in (O.bodies[i] for i in sphere_ids) if substrate["x_end"] - d <= b.state.pos[0] <= chunk_end + d
+                  and b.state.pos[2] < R]
         for row in substrate["rows"]:
             while row[1] < chunk_end:
                 zc = -R - substrate_rng.uniform(0.0, P["substrate_jitter"] * R)
-                O.bodies.append(utils.sphere((row[1], row[0], zc), R, fixed=True, material=frict, mask=SUBSTRATE_MASK))
-                substrate["positions"].append([row[1], row[0], zc])
-                substrate["radii"].append(R)
+                centre = (row[1], row[0], zc)
+                if not any((p[0] - centre[0]) ** 2 + (p[1] - centre[1]) ** 2 + (p[2] - zc) ** 2 < (2.0 * R) ** 2
+                           for p in nearby):
+                    O.bodies.append(utils.sphere(centre, R, fixed=True, material=frict, mask=SUBSTRATE_MASK))
+                    substrate["positions"].append(list(centre))
+                    substrate["radii"].append(R)
                 row[1] += d
         substrate["x_end"] = chunk_end
 
 
-if P["substrate"] == "rough":
-    extend_substrate(L + P["substrate_ahead"] * d)
 temporary_walls = [
     O.bodies.append(utils.box((xc, 0.5 * W, 0.5 * P["cloud_height"]), (d, 0.5 * W, 0.5 * P["cloud_height"] + d),
                               fixed=True, material=smooth))
@@ -226,6 +232,8 @@ if placed != int(P["n_particles"]):
 sphere_ids = list(cloud.toSimulation(material=frict))
 for i in sphere_ids:
     O.bodies[i].mask = POWDER_MASK
+if P["substrate"] == "rough":
+    extend_substrate(L + P["substrate_ahead"] * d)
 
 # Hertz normal, Mindlin tangential with the Coulomb cap; viscous damping set by YADE from the
 # restitution coefficient (en, es); rolling resistance (ScGeom6D geometry) only when asked for.
