@@ -50,10 +50,10 @@ def test_a_refused_case_is_recorded_at_once_with_its_verdict(tmp_path, config):
 
     # the reason reaches the results table and the run summary, not only the raw record
     metrics = tmp_path / "metrics.json"
-    metrics.write_text(pd.Series(case_metrics(raw, config["regime"], config["stability"])).to_json())
+    metrics.write_text(pd.Series(case_metrics(raw, config["regime"], config["stability"], config["metrics"])).to_json())
     table = build_table([metrics], [tmp_path / "missing.tsv"], [{"sweep": "points", "index": 0}])
     assert table.loc[0, "status"] == "refused" and REFUSAL in table.loc[0, "reason"]
-    summary = run_summary({"points": table})
+    summary = run_summary({"points": table}, config["regime"])
     assert summary["sets"]["points"]["failed"] == 1 and summary["sets"]["points"]["usable"] == 0
     assert REFUSAL in summary["sets"]["points"]["problems"][0]["reason"]
     assert f"{params['case_id']}: refused: yade exited with code 2 (refused): {REFUSAL}" in summary_text(summary)
