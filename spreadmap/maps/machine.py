@@ -87,8 +87,8 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7) -> Map
     ax.set_ylabel(LABELS.get(y, y))
     ax.grid(alpha=0.3)
     beyond = "" if ok.any() else "BEYOND THE DATA: "
-    ax.set_title(f"{beyond}Machine map at f = {fmt(f)}, d = {fmt(d_um)} um: h {fmt(h.min())}-{fmt(h.max())} um, "
+    title = ax.set_title(f"{beyond}Machine map at f = {fmt(f)}, d = {fmt(d_um)} um: h {fmt(h.min())}-{fmt(h.max())} um, "
                  f"v {fmt(v.min())}-{fmt(v.max())} mm/s", fontsize=10)
     note = support_note(fig, grid["supported"].to_numpy(), support, "settings")
     paths = save_figure(fig, stem, grid)
-    return MapResult(paths, grid, {"y": y, "note": note, "n_unsupported": int((~ok).sum())})
+    return MapResult(paths, grid, {"y": y, "note": note, "title": title.get_text(), "n_unsupported": int((~ok).sum())})

@@ -40,7 +40,7 @@ def support_note(fig, supported: np.ndarray, support: dict, what: str = "grid po
         text = f"all {n} {what} supported by the data ({support_rule(support)})"
         colour = "0.3"
     else:
-        text = (f"{'ALL' if k == n else k} of {n} {what} drawn BEYOND THE DATA (hatched / open marks): "
+        text = (f"{k} of {n} {what} drawn BEYOND THE DATA (hatched / open marks): "
                 f"{support_rule(support)}")
         colour = "darkred"
     fig.text(0.5, -0.01, text, ha="center", va="top", fontsize=8, color=colour)
