@@ -32,7 +32,7 @@ rule predict:
     output:
         "results/surrogate/predictions.csv",
     params:
-        points=[p["point"] for p in _points],
+        points=[{"name": p["name"], **p["point"]} for p in _points],
     log:
         "logs/predict.log",
     localrule: True

@@ -111,6 +111,7 @@ def fit_surrogate(df: pd.DataFrame, config=None, source_path=None, ranges=None, 
         "format": "spreadmap-surrogate/2", "targets": targets, "names": list(NAMES),
         "map_model": chosen, "final_models": {t: models[t].describe() for t in targets},
         "config": cfg, "n_usable": len(rows), "exclusions": rows.exclusions,
+        "n_train": int(runs["n_train"].iloc[0]), "n_test": int(runs["n_test"].iloc[0]),  # the study's one split
         "noise_columns": {t: rows.sd(t) is not None for t in targets},
         "training_rows_sha256": sha256_rows(rows.frame, targets),
         "source_path": str(source_path) if source_path else None,

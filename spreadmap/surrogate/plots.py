@@ -27,7 +27,7 @@ def _numbers(v: pd.Series) -> str:
     return (f"{v['model'].upper()}: RMSE {v['rmse']:.3f} [{v['rmse_low']:.3f}, {v['rmse_high']:.3f}]"
             f" vs noise {v['noise_sd']:.3f} ({v['noise_source']})\n"
             f"   {v['level']:.0%} PI coverage {v['coverage']:.2f} [{v['coverage_low']:.2f}, {v['coverage_high']:.2f}]; "
-            f"R$^2$ {v['r2']:.2f} of max {v['r2_max']:.2f}, noise-corr. {v['r2_corrected']:.2f}")
+            f"R$^2$ {v['r2']:.2f} of max {v['r2_max']:.2f} (noise-corrected {v['r2_corrected']:.2f})")
 
 
 def plot_parity(val: pd.DataFrame, oof: pd.DataFrame, stem) -> dict:

@@ -11,8 +11,10 @@ fresh and fitted on them. From the pooled out-of-fold predictions:
   (``noise_source = "measured"``), else the models' own estimate (``"model"``);
 * the error of the mean function, sqrt(max(MSE - noise variance, 0)): what is left once the noise
   no model can remove is taken out;
-* R^2 = 1 - MSE / var(y), its ceiling R^2_max = 1 - noise variance / var(y), the noise-corrected
-  R^2 = 1 - (MSE - noise var) / (var(y) - noise var) and R^2 / R^2_max;
+* R^2 = 1 - MSE / var(y), its ceiling R^2_max = 1 - noise variance / var(y), and the
+  noise-corrected R^2 = 1 - (MSE - noise var) / (var(y) - noise var), the share of the mean
+  function's variance the model gets right; algebraically it equals R^2 / R^2_max, so one
+  column holds both;
 * coverage of the ``interval`` prediction intervals (model SD and noise SD of a new run) with a
   bootstrap interval over cases, and the mean interval half-width.
 """
@@ -86,7 +88,6 @@ def summarise(oof: pd.DataFrame, level: float, seed: int = 0) -> dict:
         "y_sd": float(np.sqrt(var_y)),
         "r2": 1 - mse / var_y, "r2_max": r2_max,
         "r2_corrected": 1 - (mse - noise_var) / (var_y - noise_var) if var_y > noise_var else np.nan,
-        "r2_over_max": (1 - mse / var_y) / r2_max if r2_max > 0 else np.nan,
         "level": level, "coverage": cov, "coverage_low": cov_lo, "coverage_high": cov_hi,
         "half_width": float(z * oof["run_sd"].mean()),
     }
