@@ -335,3 +335,23 @@ def test_old_format_model_is_refused(result, tmp_path):
         pickle.dump(old, fh)
     with pytest.raises(saved_model.ModelFileError, match="retrain"):
         saved_model.load_model(path)
+
+
+def test_layer_quality_columns_become_targets_with_or_without_their_sd():
+    """A table with the layer-quality columns: `auto` models them too (coverage with its own SD
+    column, roughness_d without one, its noise then fitted), and the machine map picks its y axis."""
+    from spreadmap import maps
+
+    df = syn.table(30, 0.07, seed=6)
+    rng = np.random.default_rng(6)
+    X = df[list(NAMES)].to_numpy()
+    df["coverage"] = 0.7 + 0.2 * (X[:, 3] - 5) / 10 + rng.normal(0, 0.02, 30)  # set by the speed, not MFR
+    df["coverage_sd"] = 0.02
+    df["roughness_d"] = 0.3 + 0.5 * df["mfr"] + rng.normal(0, 0.01, 30)
+    r = fitting.fit_surrogate(df, {**QUICK, "model": "gp"}, log=lambda *a: None)
+    assert r.model.targets == ("mfr", "pd", "coverage", "roughness_d")
+    v = r.validation.set_index(["target", "model"])
+    assert v.loc[("coverage", "gp"), "noise_source"] == "measured"
+    assert v.loc[("roughness_d", "gp"), "noise_source"] == "model"
+    assert v.loc[("coverage", "gp"), "noise_sd"] == pytest.approx(0.02)
+    assert maps.choose_machine_y(df, r.model.targets)[0] == "coverage"
