@@ -9,6 +9,7 @@ cells they touch are hatched, and the figure says how many there are.
 """
 from __future__ import annotations
 
+import matplotlib
 import numpy as np
 from matplotlib import colors as mcolors
 from matplotlib.lines import Line2D
@@ -39,7 +40,7 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7) -> Map
     ax = fig.subplots()
     set_limits(ax, np.concatenate([(X - sx).ravel(), (X + sx).ravel()]),
                np.concatenate([(Y - sy).ravel(), (Y + sy).ravel()]), pad=0.1, pad_right=0.26, pad_top=0.12)
-    cmap = __import__("matplotlib").colormaps["viridis"]
+    cmap = matplotlib.colormaps["viridis"]
     vnorm = mcolors.Normalize(v.min(), v.max())
     for j in range(len(v) - 1):  # bands between neighbouring speed lines
         xs = np.concatenate([X[:, j], X[::-1, j + 1]])
@@ -59,7 +60,7 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7) -> Map
         ax.add_patch(Ellipse((x0, y0), 2 * a, 2 * b, fc="0.5", ec="0.3", alpha=0.18, lw=0.5, zorder=2.5))
     ax.scatter(X[ok], Y[ok], s=14, color="black", zorder=5)
     ax.scatter(X[~ok], Y[~ok], s=22, facecolor="white", edgecolor="black", zorder=5)
-    cb = fig.colorbar(__import__("matplotlib").cm.ScalarMappable(norm=vnorm, cmap=cmap), ax=ax, pad=0.02)
+    cb = fig.colorbar(matplotlib.cm.ScalarMappable(norm=vnorm, cmap=cmap), ax=ax, pad=0.02)
     cb.set_label(BY_NAME["v_mm_s"].label + "  (bands between neighbouring v lines)")
     cb.set_ticks(v if len(v) <= 12 else np.linspace(v.min(), v.max(), 6))
     # one DEM run's noise: a cross in the lower left corner

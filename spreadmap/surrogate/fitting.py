@@ -25,7 +25,7 @@ import pandas as pd
 from ..design import NAMES, bounds
 from . import study, validation
 from .models import make_model
-from .saved_model import SurrogateModel
+from .saved_model import FORMAT, SurrogateModel
 from .settings import make_config, resolve_targets
 from .training_rows import TrainingRows, select
 
@@ -108,7 +108,7 @@ def fit_surrogate(df: pd.DataFrame, config=None, source_path=None, ranges=None, 
 
     low, high = bounds(ranges)
     metadata = {
-        "format": "spreadmap-surrogate/2", "targets": targets, "names": list(NAMES),
+        "format": FORMAT, "targets": targets, "names": list(NAMES),
         "map_model": chosen, "final_models": {t: models[t].describe() for t in targets},
         "config": cfg, "n_usable": len(rows), "exclusions": rows.exclusions,
         "n_train": int(runs["n_train"].iloc[0]), "n_test": int(runs["n_test"].iloc[0]),  # the study's one split
