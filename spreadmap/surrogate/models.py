@@ -16,7 +16,11 @@ into the maps' probabilities and the Sobol indices.
   (weighted by 1/SD^2 where per-case SDs exist) with its own initial seed, so the members' spread
   is the variation of refitting on another sample of the same size. The noise beyond the per-case
   SDs (or, without them, the whole noise) is estimated out of bag: squared OOB residuals minus the
-  OOB spread of the members.
+  OOB spread of the members. Solver L-BFGS by default: with ~25 training cases per fold the
+  validation share that early stopping needs (``mlp_solver: adam``, 20 %) is five cases of noise,
+  and the L2 penalty chosen in the folds does the regularising. On the 32-case main-job-shaped
+  table MFR's cross-validated RMSE was 0.0230 [0.0185, 0.0272] with L-BFGS and 0.0237 [0.0190,
+  0.0284] with Adam and early stopping, at five times the cost.
 """
 from __future__ import annotations
 
