@@ -196,6 +196,51 @@ def bootstrap_ratio(by_point: dict, arm: str, target: str, n_boot: int = 2000, s
     return point_estimate, lo, hi, dict(zip(points, per_point))
 
 
+def pooled_constant(by_point: dict, arm: str, target: str) -> float:
+    """The arm's counting-noise constant c, pooled over points: CV^2 = c^2 / N at each point, so
+    c^2 = sum (n - 1) CV^2 N / sum (n - 1) over points (n seeds, N spheres passed, CV the seed CV)."""
+    num = den = 0.0
+    for arms in by_point.values():
+        rows = arms.get(arm, [])
+        if len(rows) < 2:
+            continue
+        s = information(rows, target)
+        num += (s["n"] - 1) * s["cv"] ** 2 * s["n_passed"]
+        den += s["n"] - 1
+    return math.sqrt(num / den) if den else math.nan
+
+
+def pooled_ratio(by_point: dict, arm: str, target: str, n_boot: int = 2000, seed: int = 0):
+    """Information per CPU-second of `arm` over `today`'s, mean over points, with the seed CV of
+    each arm modelled as c_arm / sqrt(N) (c pooled over the points, far steadier than a 4-seed CV
+    at each point): ratio_p = (N_arm / CPU_arm) / (N_today / CPU_today) x (c_today / c_arm)^2.
+    95 % interval from resampling seeds within each point and arm."""
+    rng = np.random.default_rng(seed)
+    points = sorted(p for p in by_point if arm in by_point[p] and "today" in by_point[p])
+
+    def estimate(data):
+        c_arm, c_today = pooled_constant(data, arm, target), pooled_constant(data, "today", target)
+        per = {}
+        for p in points:
+            a, t = information(data[p][arm], target), information(data[p]["today"], target)
+            per[p] = (a["n_passed"] / a["cpu"]) / (t["n_passed"] / t["cpu"]) * (c_today / c_arm) ** 2
+        return float(np.mean(list(per.values()))), per, c_arm, c_today
+
+    est, per, c_arm, c_today = estimate(by_point)
+    boots = []
+    for _ in range(n_boot):
+        data = {p: {a: [rows[i] for i in rng.integers(0, len(rows), len(rows))] for a, rows in by_point[p].items()}
+                for p in points}
+        try:
+            value = estimate(data)[0]
+        except ZeroDivisionError:  # a draw of one case repeated has no spread
+            continue
+        if math.isfinite(value):
+            boots.append(value)
+    lo, hi = np.percentile(boots, [2.5, 97.5])
+    return est, lo, hi, per, c_arm, c_today
+
+
 def report(rows: list[dict], arms: list[str]) -> str:
     ok = [r for r in rows if r["status"] == "ok" and math.isfinite(r.get("mfr", math.nan))]
     by_point: dict = {}
@@ -225,7 +270,12 @@ def report(rows: list[dict], arms: list[str]) -> str:
             if not with_arm:
                 continue
             est, lo, hi, per = bootstrap_ratio(with_arm, a, target)
-            lines.append(f"- **{a} / today, {target.upper()}**: mean over points {est:.2f}x "
+            lines.append(f"- **{a} / today, {target.upper()}**, each point's own seed CV: mean over points "
+                         f"{est:.2f}x (95 % bootstrap interval {lo:.2f}-{hi:.2f}); per point: "
+                         + ", ".join(f"{p} {v:.2f}" for p, v in sorted(per.items())))
+            est, lo, hi, per, c_arm, c_today = pooled_ratio(with_arm, a, target)
+            lines.append(f"- **{a} / today, {target.upper()}**, CV = c / sqrt(N) with c pooled over points "
+                         f"(c = {c_arm:.3f} against today's {c_today:.3f}): mean over points {est:.2f}x "
                          f"(95 % bootstrap interval {lo:.2f}-{hi:.2f}); per point: "
                          + ", ".join(f"{p} {v:.2f}" for p, v in sorted(per.items())))
         lines += [""]
@@ -262,6 +312,8 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", help="directory for the cases (default: a temporary one, removed)")
     ap.add_argument("--recompute", help="a kept directory: recompute the tables from its raw results, run nothing")
     ap.add_argument("--csv", help="one row per case")
+    ap.add_argument("--resume-csv", help="a published cases CSV of an earlier run: its ok rows are taken as they are "
+                    "and their cases not run again (the next session resumes where this one stopped)")
     ap.add_argument("--summary", help="the Markdown summary")
     args = ap.parse_args(argv)
     ARMS["today"]["rev"] = args.today_rev
@@ -280,13 +332,24 @@ def main(argv=None) -> int:
         tmp = tempfile.TemporaryDirectory(prefix="spreadmap-precision-")
         base = Path(tmp.name)
     jobs = build_jobs(args.arms, args.points, args.seeds, base)
+    published = {}
+    if args.resume_csv and Path(args.resume_csv).exists():
+        with open(args.resume_csv, newline="") as fh:
+            for r in csv.DictReader(fh):
+                if r["status"] == "ok":
+                    published[(r["arm"], r["point"], int(r["seed"]))] = {
+                        k: (r[k] if k in ("arm", "point", "status", "regime", "case_dir") else
+                            (r[k] == "True") if k == "flagged" else float(r[k]) if r[k] != "" else math.nan)
+                        for k in r}
+        print(f"{len(published)} finished cases taken from {args.resume_csv}", flush=True)
+    jobs_to_run = [j for j in jobs if (j["arm"], j["point_name"], j["seed"]) not in published]
     if not args.recompute:
         print(f"{len(jobs)} cases: {len(args.points)} points x seeds {args.seeds} x arms {args.arms}, interleaved; "
               f"{args.workers} YADE processes at once, in {base}", flush=True)
         start = time.perf_counter()
         context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=args.workers, mp_context=context) as pool:
-            futures = {pool.submit(run_job, job): job for job in jobs
+            futures = {pool.submit(run_job, job): job for job in jobs_to_run
                        if not (Path(job["case_dir"]) / "result.json").exists()}  # a kept run resumes
             for done, future in enumerate(as_completed(futures), 1):
                 job = futures[future]
@@ -297,7 +360,9 @@ def main(argv=None) -> int:
                 except Exception as error:
                     print(f"[{done}/{len(futures)}] {job['case_id']}: launcher error {error}", flush=True)
         print(f"ran in {time.perf_counter() - start:.0f} s wall", flush=True)
-    rows = [case_row(job, config) for job in jobs]
+    rows = [published.get((job["arm"], job["point_name"], job["seed"])) or case_row(job, config) for job in jobs]
+    for r in rows:
+        r["seed"] = int(r["seed"])
     text = report(rows, args.arms)
     print(text)
     if args.csv:

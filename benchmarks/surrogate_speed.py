@@ -4,8 +4,8 @@ design points, and the latency of a call for a single point.
 
 The model is the one the main job saves (results/surrogate/model.joblib; ``--model``), loaded and
 called exactly as scripts/predict.py does (spreadmap.surrogate.load_model, then
-spreadmap.surrogate.predict, which validates the points, flags those outside the trained range and
-returns the ensemble mean and spread of MFR and PD). The N points (``-n``, default 100000) are
+spreadmap.surrogate.predict, which validates the points, warns about those beyond the data and
+returns per target the mean, the model SD and the SD of a new run). The N points (``-n``, default 100000) are
 drawn uniformly inside the configuration's ``ranges``; out-of-range warnings are silenced while
 timing (the share of flagged points is printed). Each measurement (time.perf_counter) is repeated
 ``--repeat`` times (default 3); the best and the median are reported. Single-point calls: the
@@ -85,12 +85,11 @@ def main(argv=None) -> int:
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, scikit-learn {sklearn.__version__} "
           f"(trained with {model.metadata.get('versions', {}).get('sklearn', '?')})")
     print(f"model: {args.model}")
-    print("  " + "; ".join(f"{t}: {len(model.members[t])} MLP(s) of {model.neurons[t]} neurons"
-                            for t in model.targets))
-    outside = S.out_of_range(model, X).any(axis=1).mean()
+    print("  " + "; ".join(f"{t}: {model.kind(t)}" for t in model.targets))
+    outside = model.outside_design(X).any(axis=1).mean()
     print(f"points: {args.n} uniform in the config ranges "
           + ", ".join(f"{n} [{lo:g}, {hi:g}]" for n, lo, hi in zip(design.NAMES, low, high))
-          + f"; {outside:.1%} outside the trained range (predicted and flagged; warnings silenced)")
+          + f"; {outside:.1%} outside the design ranges (predicted and flagged; warnings silenced)")
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", S.OutOfRangeWarning)

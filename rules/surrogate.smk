@@ -1,6 +1,6 @@
 rule surrogate:
-    """MLP surrogates of MFR and PD on the LDS sweep (hidden-neuron sweep, 3 seeds, 80/20 split
-    shared by all partitions, CV, learning curve, GP baseline, ensemble uncertainty)."""
+    """The noise-aware surrogate (GP and bootstrap MLP ensemble, validated by repeated k-fold against
+    the noise; the map model trained on every usable case) and the study's MLP protocol beside it."""
     input:
         table="results/tables/lds.csv",
     output:
@@ -14,6 +14,7 @@ rule surrogate:
                         category="Surrogate"),
     params:
         surrogate=config.get("surrogate", {}),
+        ranges=RANGES,
     log:
         "logs/surrogate.log",
     localrule: True
@@ -24,13 +25,14 @@ rule surrogate:
 
 
 rule predict:
-    """Surrogate predictions (with uncertainty) for the chosen points of config `points`."""
+    """Surrogate predictions for the chosen points of config `points`: per target the mean, the
+    model's SD and the SD a new DEM run would show."""
     input:
         model="results/surrogate/model.joblib",
     output:
         "results/surrogate/predictions.csv",
     params:
-        points=[p["point"] for p in _points],
+        points=[{"name": p["name"], **p["point"]} for p in _points],
     log:
         "logs/predict.log",
     localrule: True

@@ -1,27 +1,40 @@
-"""Snakemake entry: design maps, parallel coordinates, regime overlay and parameter ranking."""
+"""Snakemake entry: design maps with their uncertainty, parallel coordinates, regimes, ranking."""
 from pathlib import Path
 
 import pandas as pd
 
 from spreadmap import maps, sensitivity
-from spreadmap.surrogate import load_model
 from spreadmap.logs import log_to
+from spreadmap.surrogate import load_model
+from spreadmap.surrogate.settings import map_config
 
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 p = sm.params
+cfg = map_config(p.maps)
 out = Path(sm.output.ranking).parent
 model = load_model(sm.input.model)
 cases = pd.read_csv(sm.input.table)
-machine, powder = p.maps.get("machine", {}), p.maps.get("powder", {})
-maps.machine_map(model, out / "machine_map", ranges=p.ranges, **machine)
-maps.powder_band_map(model, out / "powder_band_map", ranges=p.ranges, **powder)
-maps.powder_cluster_map(model, out / "powder_cluster_map", ranges=p.ranges, **powder)
-maps.parallel_coordinates(cases, out / "parallel_coordinates", mfr_min=p.maps.get("best_mfr_min", 0.0), ranges=p.ranges)
-maps.regime_overlay(cases, model, out / "regime_overlay", jam_mfr_max=p.regime["jam_mfr_max"],
-                    short_feed_pd_min=p.regime["short_feed_pd_min"])
-ranking = sensitivity.sensitivity(model, n=p.maps.get("sobol_n", 1024), ranges=p.ranges)
+usable = maps.usable_cases(cases)
+y = cfg["machine"]["y"]
+if y == "auto":
+    y, scores = maps.choose_machine_y(usable, model.targets)
+    print(f"machine map y axis: {y}" + (f" (scores beyond MFR:\n{scores.to_string()})" if len(scores) else
+                                        " (no layer-quality target in the model)"))
+elif y not in model.targets:
+    raise ValueError(f"maps.machine.y: {y!r} is not a target of the surrogate ({list(model.targets)})")
+machine = {k: v for k, v in cfg["machine"].items() if k != "y"}
+support = cfg["support"]
+maps.machine_map(model, out / "machine_map", y=y, ranges=p.ranges, support=support, **machine)
+maps.powder_band_map(model, out / "powder_band_map", y=y, ranges=p.ranges, support=support, **cfg["powder"])
+maps.powder_cluster_map(model, out / "powder_cluster_map", y=y, ranges=p.ranges, support=support, **cfg["powder"])
+maps.parallel_coordinates(cases, out / "parallel_coordinates", mfr_min=cfg["best_mfr_min"], ranges=p.ranges)
+maps.regime_overlay(cases, model, out / "regime_overlay", p.regime, ranges=p.ranges, support=support,
+                    **cfg["regime_plane"])
+ranking = sensitivity.sensitivity(model, list(model.targets), n=cfg["sobol_n"], draws=cfg["sobol_draws"],
+                                  ranges=p.ranges)
 ranking.to_csv(sm.output.ranking, index=False)
 sensitivity.plot_ranking(ranking, out / "sensitivity_ranking")
-print(ranking.to_string())
+with pd.option_context("display.width", 250, "display.max_columns", None):
+    print(ranking.round(3).to_string())

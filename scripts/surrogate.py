@@ -1,17 +1,19 @@
-"""Snakemake entry: train, validate and save the MLP surrogates; figures and metrics table."""
+"""Snakemake entry: train and validate the surrogate, save it, draw its validation figures."""
 from pathlib import Path
 
 import pandas as pd
 
-from spreadmap.surrogate import fit_surrogate, save_model
-from spreadmap.surrogate_plots import plot_all
 from spreadmap.logs import log_to
+from spreadmap.surrogate import fit_surrogate, save_model
+from spreadmap.surrogate.plots import plot_all
 
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 table = pd.read_csv(sm.input.table)
-result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table)
+result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table, ranges=sm.params.ranges)
 save_model(result.model, sm.output.model)
 plot_all(result, Path(sm.output.model).parent, prefix="surrogate")
-print(pd.read_csv(sm.output.metrics).to_string())
+with pd.option_context("display.width", 250, "display.max_columns", None):
+    print(result.validation.round(4).to_string())
+    print(result.study_summary.round(4).to_string())

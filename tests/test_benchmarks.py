@@ -61,8 +61,9 @@ def tiny_model(path):
     table["status"], table["flagged"] = "ok", False
     table["mfr"] = 0.5 - 0.3 * u[:, 0] + 0.1 * u[:, 2]
     table["pd"] = 0.6 - 0.1 * u[:, 1]
-    result = S.fit_surrogate(table, dict(neurons=[4], seeds=[0], gp=False, cv_folds=2, cv_all_neurons=False,
-                                         learning_curve=None, ensemble_members=2, max_iter=200))
+    result = S.fit_surrogate(table, dict(neurons=[4], seeds=[0], cv_folds=2, cv_repeats=1, learning_curve=False,
+                                         mlp_sizes=[2], mlp_alphas=[1.0], ensemble_members=2, gp_restarts=0),
+                             log=lambda *a: None)
     S.save_model(result.model, path)
     return path
 

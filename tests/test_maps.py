@@ -1,154 +1,170 @@
-"""Maps drawn from an analytic predictor and a synthetic table of cases (no YADE)."""
+"""Maps (spreadmap.maps) drawn from a real GP surrogate of synthetic cases with a known truth."""
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.stats import norm
 
+import synthetic_cases as syn
 from spreadmap import maps
 from spreadmap.design import NAMES, bounds
+from spreadmap.maps import grids
+from spreadmap.surrogate.models import GPModel
+from spreadmap.surrogate.saved_model import SurrogateModel
 
 LOW, HIGH = bounds()
+SUPPORT = {"max_distance": 1.5, "max_sd_ratio": 1.0}
 
 
-def predict(points):
-    """Smooth analytic stand-in for the surrogate: MFR grows with h/d, falls with f and v."""
-    p = np.asarray(points, float)
-    f, d, h, v = p.T
-    mfr = 0.65 * (1 - np.exp(-(h / d - 1))) * (1 - 0.4 * (f - 0.15) / 0.3) * (1 - 0.02 * (v - 5))
-    pd_ = (0.40 + 0.25 * np.sqrt(np.clip(mfr, 0, None)) - 0.05 * (f - 0.15) / 0.3
-           - 0.004 * (v - 5) + 0.001 * (h - 55))
-    return np.column_stack([mfr, pd_])
+def surrogate(table) -> SurrogateModel:
+    X = table[list(NAMES)].to_numpy(float)
+    models = {t: GPModel().fit(X, table[t].to_numpy(float), table[f"{t}_sd"].to_numpy(float)) for t in ("mfr", "pd")}
+    return SurrogateModel(("mfr", "pd"), models, X, LOW, HIGH)
 
 
-def assert_files(result):
-    assert set(result.paths) == {"png", "pdf", "csv"}
-    for path in result.paths.values():
-        assert path.exists() and path.stat().st_size > 0, path
-    return pd.read_csv(result.paths["csv"])
+@pytest.fixture(scope="module")
+def cases():
+    return syn.table(64, 0.07, seed=3)
 
 
-def test_save_figure(tmp_path):
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots()
-    ax.plot([0, 1], [0, 1])
-    paths = maps.save_figure(fig, tmp_path / "sub" / "fig", pd.DataFrame({"x": [0, 1]}))
-    assert [p.name for p in paths.values()] == ["fig.png", "fig.pdf", "fig.csv"]
-    assert all(p.stat().st_size > 0 for p in paths.values())
-    assert pd.read_csv(paths["csv"])["x"].tolist() == [0, 1]
+@pytest.fixture(scope="module")
+def model(cases):
+    return surrogate(cases)
 
 
-def test_machine_map_grid(tmp_path):
-    res = maps.machine_map(predict, tmp_path / "machine", f=0.3, d_um=20.0, n_h=4, n_v=3)
-    csv = assert_files(res)
-    assert len(csv) == 4 * 3
-    assert list(csv.columns) == [*NAMES, "mfr", "pd"]
-    np.testing.assert_allclose(np.unique(csv["h_um"]), np.linspace(55, 75, 4))
-    np.testing.assert_allclose(np.unique(csv["v_mm_s"]), np.linspace(5, 15, 3))
-    assert (csv["f"] == 0.3).all() and (csv["d_um"] == 20.0).all()
-    # every (h, v) pair once, and the values are the predictor's
-    assert len(csv[["h_um", "v_mm_s"]].drop_duplicates()) == 12
-    np.testing.assert_allclose(csv[["mfr", "pd"]].to_numpy(),
-                               predict(csv[list(NAMES)].to_numpy()))
+@pytest.fixture(scope="module")
+def half_model():
+    """Trained only on small particles (d <= 25 um): the large-d half of every map is beyond the data."""
+    pts = syn.halton_points(256)
+    return surrogate(syn.table(points=pts[pts[:, 1] <= 25][:64], rel=0.07))
 
 
-def test_machine_map_defaults_and_explicit_values(tmp_path):
-    res = maps.machine_map(predict, tmp_path / "m2", h_values=[55, 60, 75],
-                           v_values=[5, 6.1, 10, 12, 15])
-    csv = assert_files(res)
-    assert len(csv) == 15
-    assert (csv["f"] == 0.45).all() and (csv["d_um"] == 45.0).all()  # SPEC defaults
-    np.testing.assert_allclose(np.unique(csv["h_um"]), [55, 60, 75])
-    np.testing.assert_allclose(np.unique(csv["v_mm_s"]), [5, 6.1, 10, 12, 15])
+def files_ok(res):
+    for p in res.paths.values():
+        assert p.stat().st_size > 0, p
+    return pd.read_csv(res.paths["csv"])
 
 
-def test_machine_map_many_lines(tmp_path):
-    res = maps.machine_map(predict, tmp_path / "m3", n_h=11, n_v=9)  # labels thinned
-    assert len(assert_files(res)) == 99
+def test_region_beyond_the_data_is_masked(half_model, tmp_path):
+    res = maps.powder_band_map(half_model, tmp_path / "band", h_um=65, v_mm_s=10, n_d=21, n_f=3, support=SUPPORT)
+    csv = files_ok(res)
+    far = csv["d_um"] >= 35  # more than 10 um (a quarter of the range) beyond the last case
+    assert not csv.loc[far, "supported"].any()
+    assert csv.loc[csv["d_um"] <= 20, "supported"].mean() > 0.8
+    assert "BEYOND THE DATA" in res.info["note"]
+    # a map wholly beyond the data says so in its title (the machine map's d = 45 um)
+    m = maps.machine_map(half_model, tmp_path / "machine", d_um=45, n_h=3, n_v=3, support=SUPPORT)
+    assert m.info["n_unsupported"] == 9 and m.info["note"].startswith("9 of 9")
+    assert m.info["title"].startswith("BEYOND THE DATA")
 
 
-def test_powder_band_map(tmp_path):
-    res = maps.powder_band_map(predict, tmp_path / "band", n_d=9, n_f=3)
-    csv = assert_files(res)
-    assert len(csv) == 9 * 3
-    assert (csv["h_um"] == 57.0).all() and (csv["v_mm_s"] == 6.1).all()
-    np.testing.assert_allclose(np.unique(csv["f"]), [0.15, 0.30, 0.45])
-    np.testing.assert_allclose(np.unique(csv["d_um"]), np.linspace(10, 50, 9))
+def test_support_is_distance_to_data_not_the_bounding_box():
+    """Cases in two opposite corners: the centre of their bounding box is far from both."""
+    rng = np.random.default_rng(0)
+    u = np.vstack([rng.random((30, 4)) * 0.25, 0.75 + rng.random((30, 4)) * 0.25])
+    m = surrogate(syn.table(points=LOW + u * (HIGH - LOW), rel=0.03))
+    centre = pd.DataFrame([(LOW + HIGH) / 2], columns=list(NAMES))
+    corner = pd.DataFrame([LOW + 0.12 * (HIGH - LOW)], columns=list(NAMES))
+    assert not grids.evaluate(m, centre, ["mfr"], SUPPORT)["supported"].item()
+    assert grids.evaluate(m, corner, ["mfr"], SUPPORT)["supported"].item()
 
 
-def test_powder_cluster_map(tmp_path):
-    res = maps.powder_cluster_map(predict, tmp_path / "clusters", h_um=60.0, v_mm_s=10.0,
-                                  d_values=[15, 30, 45], n_f=4)
-    csv = assert_files(res)
-    assert len(csv) == 12
-    assert (csv["h_um"] == 60.0).all() and (csv["v_mm_s"] == 10.0).all()
-    np.testing.assert_allclose(np.unique(csv["d_um"]), [15, 30, 45])
-    np.testing.assert_allclose(np.unique(csv["f"]), np.linspace(0.15, 0.45, 4))
+def test_machine_map_follows_the_truth_within_its_uncertainty(model, tmp_path):
+    res = maps.machine_map(model, tmp_path / "m", f=0.3, d_um=20.0, n_h=4, n_v=3, support=SUPPORT)
+    csv = files_ok(res)
+    assert len(csv) == 12 and len(csv[["h_um", "v_mm_s"]].drop_duplicates()) == 12
+    X = csv[list(NAMES)].to_numpy()
+    for t in ("mfr", "pd"):
+        z = (csv[t] - syn.TRUTH[t](X)) / csv[f"{t}_model_sd"]
+        assert np.mean(np.abs(z) < 3) >= 0.9, z.round(2).tolist()
+        assert (csv[f"{t}_run_sd"] > csv[f"{t}_model_sd"]).all()
 
 
-def make_cases(n=60, seed=0):
-    rng = np.random.default_rng(seed)
-    pts = LOW + rng.random((n, 4)) * (HIGH - LOW)
-    y = predict(pts) + rng.normal(0, 0.01, (n, 2))
-    cases = pd.DataFrame(pts, columns=list(NAMES))
-    cases.insert(0, "case_id", [f"lds_{i:04d}" for i in range(n)])
-    cases["status"] = "ok"
-    cases["flagged"] = False
-    cases["mfr"], cases["pd"] = y[:, 0], y[:, 1]
-    cases["regime"] = maps.classify_regime(y[:, 0], y[:, 1], 0.15, 0.5)
-    return cases
+def test_powder_maps_resolve_the_friction_effect(model, tmp_path):
+    """The truth lowers MFR by 15 % of its value from f = 0.15 to 0.45: the map's interval excludes 0
+    where the data are dense, and holds the true change."""
+    res = maps.powder_band_map(model, tmp_path / "band", h_um=65, v_mm_s=10, n_d=9, n_f=3, support=SUPPORT)
+    eff = res.info["effect"]
+    X0 = np.column_stack([np.full(9, 0.15), eff["d_um"], np.full(9, 65.0), np.full(9, 10.0)])
+    X1 = X0.copy()
+    X1[:, 0] = 0.45
+    true = syn.truth_mfr(X1) - syn.truth_mfr(X0)
+    inside = (eff["mfr_change_low"] <= true) & (true <= eff["mfr_change_high"])
+    assert inside.mean() >= 0.75
+    assert (eff["mfr_change_high"] < 0).sum() >= 3
+    clusters = maps.powder_cluster_map(model, tmp_path / "clusters", h_um=60, v_mm_s=10, d_values=[15, 30, 45], n_f=4)
+    assert len(files_ok(clusters)) == 12
 
 
-def test_parallel_coordinates_marks_best(tmp_path):
-    cases = make_cases()
-    # the densest case overall flows too little; a flagged case is denser still;
-    # the best admissible case is planted explicitly
-    cases.loc[3, ["mfr", "pd"]] = [0.05, 0.73]
-    cases.loc[7, ["mfr", "pd", "flagged"]] = [0.6, 0.74, True]
-    cases.loc[11, ["mfr", "pd"]] = [0.45, 0.72]
-    cases.loc[12, ["status", "mfr", "pd"]] = ["failed", np.nan, np.nan]
-    res = maps.parallel_coordinates(cases, tmp_path / "pc", mfr_min=0.3)
-    csv = assert_files(res)
-    assert res.best["case_id"] == "lds_0011"
-    assert len(csv) == len(cases) - 2  # flagged and failed cases are not drawn
-    assert csv["best"].sum() == 1
-    assert csv.loc[csv["best"], "case_id"].item() == "lds_0011"
-    for col in ("mfr_norm", "pd_norm", *[f"{n}_norm" for n in NAMES]):
-        assert csv[col].between(0, 1).all()
-    # without the MFR threshold the densest usable case wins; a score can override both
-    assert maps.best_case(maps.usable_cases(cases))["case_id"] == "lds_0003"
-    res2 = maps.parallel_coordinates(cases, tmp_path / "pc2",
-                                     score=lambda df: df["mfr"] + df["pd"])
-    assert res2.best["case_id"] == "lds_0011"
+RULES = {"jam_mfr_max": 0.05, "short_feed_coverage_min": 0.5, "short_feed_thickness_min": 0.25}
 
 
-def test_regime_overlay_counts(tmp_path):
-    cases = make_cases(80, seed=1)
-    cases.loc[0, "regime"] = ""  # a failed run has no regime
-    cases.loc[0, ["status", "mfr", "pd"]] = ["failed", np.nan, np.nan]
-    cases.loc[1:5, "regime"] = "jamming"  # DEM disagrees with the thresholds for a few
-    res = maps.regime_overlay(cases, predict, tmp_path / "regimes", jam_mfr_max=0.15,
-                              short_feed_pd_min=0.5)
-    csv = assert_files(res)
-    expected = cases["regime"].value_counts()
-    for r in maps.REGIMES:
-        assert res.counts.loc[r, "dem"] == expected.get(r, 0)
-    assert res.counts["dem"].sum() == len(cases) - 1
+def test_regime_probability_is_the_predictive_normal():
+    frame = pd.DataFrame({"mfr": [0.05, 0.30, 0.30, 0.30], "mfr_run_sd": [0.02] * 4,
+                          "coverage": [0.9, 0.5, 0.9, 0.9], "coverage_run_sd": [0.05] * 4,
+                          "thickness_ratio": [0.6, 0.6, 0.6, 0.25], "thickness_ratio_run_sd": [0.05] * 4})
+    p = grids.regime_probabilities(frame, RULES)
+    assert p["p_jamming"].tolist() == pytest.approx([0.5, norm.cdf(-12.5), norm.cdf(-12.5), norm.cdf(-12.5)])
+    ok_cov, ok_thick = 1 - norm.cdf(-8.0), 1 - norm.cdf(-7.0)   # (0.5 - 0.9) / 0.05, (0.25 - 0.6) / 0.05
+    assert p["p_short_feed"].iloc[1] == pytest.approx(1 - 0.5 * ok_thick, rel=1e-9)  # coverage at its threshold
+    assert p["p_short_feed"].iloc[3] == pytest.approx(1 - 0.5 * ok_cov, rel=1e-6)
+    assert p["p_normal"].iloc[2] == pytest.approx(ok_cov * ok_thick, rel=1e-9)
+    np.testing.assert_allclose(p[["p_normal", "p_jamming", "p_short_feed"]].sum(axis=1), 1.0)
+
+
+def test_regime_overlay_counts_planted_regimes(tmp_path):
+    """Regimes planted by hand on the cases (the 5 lowest MFR jam; of the others, the 7 with the
+    least coverage are short feed): the DEM counts are the planted ones, and a surrogate of the
+    three targets the rule reads puts nearly every case in its planted regime."""
+    df = syn.table(60, 0.03, seed=4)
+    rng = np.random.default_rng(5)
+    df["coverage"] = np.clip(1.6 * df["pd"], 0, 1) + rng.normal(0, 0.01, len(df))
+    df["coverage_sd"] = 0.01
+    df["thickness_ratio"], df["thickness_ratio_sd"] = 0.6 + rng.normal(0, 0.01, len(df)), 0.01
+    df["regime"] = "normal"
+    jammed = df["mfr"].nsmallest(5).index
+    df.loc[jammed, "regime"] = "jamming"
+    thin = df.drop(jammed)["coverage"].nsmallest(8).index
+    df.loc[thin[:7], "regime"] = "short_feed"
+    df.loc[0, ["regime", "status"]] = ["", "failed"]
+    rules = {"jam_mfr_max": float(df["mfr"].nsmallest(6).iloc[4:6].mean()),
+             "short_feed_coverage_min": float(df.loc[thin[6:8], "coverage"].mean()), "short_feed_thickness_min": 0.2}
+    ok = df[df["status"] == "ok"]
+    X = ok[list(NAMES)].to_numpy(float)
+    targets = ("mfr", "coverage", "thickness_ratio")
+    models = {t: GPModel().fit(X, ok[t].to_numpy(float), ok[f"{t}_sd"].to_numpy(float)) for t in targets}
+    m = SurrogateModel(targets, models, X, LOW, HIGH)
+    res = maps.regime_overlay(df, m, tmp_path / "reg", rules, n_d=12, n_h=8, support=SUPPORT)
+    counts = res.info["counts"]
+    planted = ok["regime"].value_counts()
+    assert counts["dem"].to_dict() == {r: int(planted.get(r, 0)) for r in maps.REGIMES}
     assert res.info["excluded"] == 1
-    assert len(csv) == len(cases) - 1
-    # surrogate regimes follow the rules on the predictor's values
-    pred = predict(cases.loc[1:, list(NAMES)].to_numpy())
-    rule = maps.classify_regime(pred[:, 0], pred[:, 1], 0.15, 0.5)
-    for r in maps.REGIMES:
-        assert res.counts.loc[r, "surrogate"] == int((rule == r).sum())
-    assert res.info["agree"] == int(csv["agree"].sum())
-    assert (csv["regime"] == csv["regime_pred"]).sum() == res.counts["both"].sum()
+    assert counts["both"].sum() >= 0.85 * counts["dem"].sum()
+    files_ok(res)
 
 
-def test_classify_regime_rules():
-    got = maps.classify_regime([0.01, 0.01, 0.3, 0.3], [0.3, 0.6, 0.3, 0.6], 0.05, 0.5)
-    assert list(got) == ["jamming", "jamming", "short_feed", "normal"]
+def test_regime_overlay_needs_the_targets_of_the_rule(model, cases, tmp_path):
+    with pytest.raises(ValueError, match="coverage"):
+        maps.regime_overlay(cases, model, tmp_path / "reg", RULES, support=SUPPORT)
 
 
-def test_bad_predictor_shape(tmp_path):
-    with pytest.raises(ValueError, match="shape"):
-        maps.machine_map(lambda p: p[:, :1], tmp_path / "x", n_h=2, n_v=2)
+def test_machine_y_is_the_layer_measure_with_most_beyond_mfr():
+    rng = np.random.default_rng(1)
+    df = syn.table(40, 0.07)
+    df["layer_packing"] = 0.9 * df["mfr"] + rng.normal(0, 0.005, 40)      # MFR again
+    df["coverage"] = rng.uniform(0.6, 1.0, 40)                             # something else
+    y, scores = maps.choose_machine_y(df, ["mfr", "pd", "layer_packing", "coverage"])
+    assert y == "coverage" and len(scores) == 2
+    assert maps.choose_machine_y(df, ["mfr", "pd"])[0] == "pd"
+
+
+def test_parallel_coordinates_marks_best(cases, tmp_path):
+    c = cases.copy()
+    c.loc[3, ["mfr", "pd"]] = [0.05, 0.73]          # densest, but it hardly flows
+    c.loc[7, ["mfr", "pd", "flagged"]] = [0.6, 0.74, True]  # denser still, but flagged
+    c.loc[11, ["mfr", "pd"]] = [0.45, 0.72]
+    c.loc[12, ["status", "mfr", "pd"]] = ["failed", np.nan, np.nan]
+    res = maps.parallel_coordinates(c, tmp_path / "pc", mfr_min=0.3)
+    csv = files_ok(res)
+    assert res.info["best"]["case_id"] == "lds-00011"
+    assert len(csv) == len(c) - 2 and csv["best"].sum() == 1
+    assert maps.best_case(maps.usable_cases(c))["case_id"] == "lds-00003"

@@ -1,0 +1,16 @@
+"""Processing design maps from the surrogate, with their uncertainty; the DEM sample and regimes.
+
+``grids`` computes (evaluated design grids, support, regime probabilities, the effect of friction,
+the machine map's y axis); one module per figure draws: ``machine`` (machine map), ``powder``
+(band and cluster maps), ``parallel`` (parallel coordinates of the DEM cases), ``regimes``;
+``labels`` places line labels, ``style`` holds what the figures share.
+"""
+from .grids import choose_machine_y
+from .machine import machine_map
+from .parallel import best_case, parallel_coordinates, usable_cases
+from .powder import powder_band_map, powder_cluster_map
+from .regimes import REGIMES, regime_overlay
+from .style import MapResult
+
+__all__ = ["MapResult", "machine_map", "powder_band_map", "powder_cluster_map", "parallel_coordinates",
+           "best_case", "usable_cases", "regime_overlay", "REGIMES", "choose_machine_y"]

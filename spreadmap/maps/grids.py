@@ -1,0 +1,115 @@
+"""The numbers behind the maps: grids of design points evaluated on the surrogate.
+
+Every grid point gets, per target, the mean, the model SD and the SD of a new DEM run, its
+distance to the nearest usable case (in median case spacings, design ranges scaled to [0, 1]) and
+whether the data support it: ``supported`` when that distance is at most ``max_distance`` and,
+for every target drawn, the model SD is at most ``max_sd_ratio`` x the noise SD of one run (the
+model knows the mean there better than one more run would). Outside, maps hatch or open their marks.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from scipy.stats import norm
+
+from ..design import NAMES, bounds
+from ..surrogate.settings import LAYER_TARGETS
+
+
+def values(given, n: int, name: str, ranges=None) -> np.ndarray:
+    """Explicit values if given, else n values spanning the range of ``name`` (ends included)."""
+    if given is not None:
+        v = np.asarray(given, float).ravel()
+        if v.size == 0:
+            raise ValueError(f"no values given for {name}")
+        return np.sort(v)
+    if n < 2:
+        raise ValueError(f"grid size for {name} must be >= 2")
+    low, high = bounds(ranges)
+    i = NAMES.index(name)
+    return np.linspace(low[i], high[i], n)
+
+
+def grid_frame(**columns) -> pd.DataFrame:
+    """Full tensor grid, NAMES column order, the first given name varying slowest."""
+    order = [n for n in NAMES if n in columns]
+    mesh = np.meshgrid(*[np.atleast_1d(np.asarray(columns[n], float)) for n in order], indexing="ij")
+    return pd.DataFrame({n: m.ravel() for n, m in zip(order, mesh)})[list(NAMES)]
+
+
+def evaluate(model, frame: pd.DataFrame, targets, support: dict) -> pd.DataFrame:
+    """``frame`` with, per target, ``<t>``, ``<t>_model_sd``, ``<t>_run_sd``, ``<t>_noise_sd``; and
+    ``data_distance`` and ``supported`` (see the module docstring)."""
+    X = frame[list(NAMES)].to_numpy(float)
+    out = frame.copy()
+    stats = model.predict_stats(X)
+    ok = model.data_distance(X) <= float(support["max_distance"])
+    out["data_distance"] = model.data_distance(X)
+    for t in targets:
+        mean, msd, rsd = stats[t]
+        noise = np.sqrt(np.clip(rsd**2 - msd**2, 0, None))
+        out[t], out[f"{t}_model_sd"], out[f"{t}_run_sd"], out[f"{t}_noise_sd"] = mean, msd, rsd, noise
+        ok &= msd <= float(support["max_sd_ratio"]) * noise
+    out["supported"] = ok
+    return out
+
+
+def f_effect(model, targets, h_um: float, v_mm_s: float, d: np.ndarray, f_low: float, f_high: float,
+             draws: int = 200, seed: int = 0) -> pd.DataFrame:
+    """Per d: the change of each target from f_low to f_high on the mean function, with a 95 %
+    interval from joint draws (both ends of the change in the same draw), and the probability
+    that the change is positive."""
+    X = np.vstack([grid_frame(f=f_low, d_um=d, h_um=h_um, v_mm_s=v_mm_s).to_numpy(),
+                   grid_frame(f=f_high, d_um=d, h_um=h_um, v_mm_s=v_mm_s).to_numpy()])
+    F = model.draws(X, draws, seed=seed, targets=list(targets))
+    mean = model.predict_stats(X)
+    rows = {"d_um": d}
+    for t in targets:
+        diff = F[t][:, len(d):] - F[t][:, :len(d)]
+        rows[f"{t}_change"] = mean[t][0][len(d):] - mean[t][0][:len(d)]
+        rows[f"{t}_change_low"] = np.quantile(diff, 0.025, axis=0)
+        rows[f"{t}_change_high"] = np.quantile(diff, 0.975, axis=0)
+        rows[f"{t}_p_increase"] = np.mean(diff > 0, axis=0)
+    return pd.DataFrame(rows)
+
+
+REGIME_TARGETS = ("mfr", "coverage", "thickness_ratio")  # what metrics.classify reads
+
+
+def regime_probabilities(frame: pd.DataFrame, rules: dict) -> pd.DataFrame:
+    """Probability that a new DEM run at each point falls in each regime: ``metrics.classify``'s
+    rule (jamming if MFR < jam_mfr_max, else short feed if coverage or thickness / h is below its
+    threshold) applied to the predictive normal of each target (model and noise, ``<t>_run_sd``),
+    by ``metrics.regime_probabilities`` (the targets' errors taken as independent)."""
+    from ..metrics import regime_probabilities as probabilities
+
+    p = probabilities(frame["mfr"], frame["mfr_run_sd"], frame["coverage"], frame["coverage_run_sd"],
+                      frame["thickness_ratio"], frame["thickness_ratio_run_sd"], rules)
+    out = frame.copy()
+    out["p_jamming"], out["p_short_feed"], out["p_normal"] = p["jamming"], p["short_feed"], p["normal"]
+    return out
+
+
+def choose_machine_y(cases: pd.DataFrame, targets) -> tuple[str, pd.DataFrame]:
+    """The machine map's y axis: of the layer-quality targets present, the one carrying most
+    information beyond MFR, else PD. Score: the variance of the target left after a straight-line
+    fit on MFR, over its noise variance where the table gives ``<t>_sd`` (signal beyond MFR against
+    noise), else the unexplained share 1 - r^2."""
+    cands = [t for t in LAYER_TARGETS if t in targets and t in cases]
+    rows = []
+    for t in cands:
+        ok = np.isfinite(cases[t].to_numpy(float)) & np.isfinite(cases["mfr"].to_numpy(float))
+        y, x = cases.loc[ok, t].to_numpy(float), cases.loc[ok, "mfr"].to_numpy(float)
+        if len(y) < 3 or np.ptp(x) == 0:
+            continue
+        resid = y - np.polyval(np.polyfit(x, y, 1), x)
+        sd_col = f"{t}_sd"
+        if sd_col in cases and np.isfinite(cases.loc[ok, sd_col].to_numpy(float)).all():
+            score, how = resid.var(ddof=2) / np.mean(cases.loc[ok, sd_col].to_numpy(float) ** 2), "residual / noise variance"
+        else:
+            score, how = resid.var(ddof=2) / y.var(ddof=1), "1 - r^2"
+        rows.append({"target": t, "score": float(score), "how": how, "n": int(ok.sum())})
+    table = pd.DataFrame(rows, columns=["target", "score", "how", "n"])
+    if table.empty:
+        return "pd", table
+    return str(table.loc[table["score"].idxmax(), "target"]), table

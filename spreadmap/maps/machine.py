@@ -1,0 +1,95 @@
+"""Machine map: MFR (x) against a layer-quality measure (y) over a grid of layer thickness h and
+blade speed v, at fixed powder (f, d).
+
+Each blade speed is a line through the h values and the area between neighbouring speed lines is
+filled in the colour of the interval; dashed lines join constant h. Uncertainty: an ellipse of one
+model SD (x and y) around every grid setting, and a cross showing one DEM run's noise SD, so a
+trend smaller than the ellipses is not resolved. Settings beyond the data have open marks, the
+cells they touch are hatched, and the figure says how many there are.
+"""
+from __future__ import annotations
+
+import matplotlib
+import numpy as np
+from matplotlib import colors as mcolors
+from matplotlib.lines import Line2D
+from matplotlib.patches import Ellipse, Polygon
+
+from ..design import BY_NAME
+from ..figures import new_figure, save_figure
+from . import grids
+from .labels import end_label, which_labelled
+from .style import HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
+
+
+def machine_map(model, stem, y: str = "pd", f: float = 0.45, d_um: float = 45.0, n_h: int = 5, n_v: int = 5,
+                h_values=None, v_values=None, ranges=None, support=None, max_labels: int = 7) -> MapResult:
+    support = support or {"max_distance": 1.5, "max_sd_ratio": 1.0}
+    h = grids.values(h_values, n_h, "h_um", ranges)
+    v = grids.values(v_values, n_v, "v_mm_s", ranges)
+    grid = grids.evaluate(model, grids.grid_frame(f=f, d_um=d_um, h_um=h, v_mm_s=v), ["mfr", y], support)
+    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels)
+
+
+def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7) -> MapResult:
+    shape = (len(h), len(v))
+    X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
+    sx, sy = grid["mfr_model_sd"].to_numpy().reshape(shape), grid[f"{y}_model_sd"].to_numpy().reshape(shape)
+    ok = grid["supported"].to_numpy().reshape(shape)
+    fig = new_figure(8.6, 6.6)
+    ax = fig.subplots()
+    set_limits(ax, np.concatenate([(X - sx).ravel(), (X + sx).ravel()]),
+               np.concatenate([(Y - sy).ravel(), (Y + sy).ravel()]), pad=0.1, pad_right=0.26, pad_top=0.12)
+    cmap = matplotlib.colormaps["viridis"]
+    vnorm = mcolors.Normalize(v.min(), v.max())
+    for j in range(len(v) - 1):  # bands between neighbouring speed lines
+        xs = np.concatenate([X[:, j], X[::-1, j + 1]])
+        ys = np.concatenate([Y[:, j], Y[::-1, j + 1]])
+        ax.fill(xs, ys, color=cmap(vnorm((v[j] + v[j + 1]) / 2)), alpha=0.3, lw=0, zorder=1)
+        for i in range(len(h) - 1):
+            if not ok[i:i + 2, j:j + 2].all():
+                quad = [(X[i, j], Y[i, j]), (X[i + 1, j], Y[i + 1, j]), (X[i + 1, j + 1], Y[i + 1, j + 1]),
+                        (X[i, j + 1], Y[i, j + 1])]
+                ax.add_patch(Polygon(quad, closed=True, zorder=2, **HATCH))
+    v_lab, h_lab = which_labelled(len(v), max_labels), which_labelled(len(h), max_labels)
+    for j in range(len(v)):
+        ax.plot(X[:, j], Y[:, j], color=cmap(vnorm(v[j])), lw=2.2 if j in v_lab else 1.0, zorder=3)
+    for i in range(len(h)):
+        ax.plot(X[i], Y[i], color="0.15", lw=1.3 if i in h_lab else 0.6, ls="--", zorder=4)
+    for x0, y0, a, b in zip(X.ravel(), Y.ravel(), sx.ravel(), sy.ravel()):
+        ax.add_patch(Ellipse((x0, y0), 2 * a, 2 * b, fc="0.5", ec="0.3", alpha=0.18, lw=0.5, zorder=2.5))
+    ax.scatter(X[ok], Y[ok], s=14, color="black", zorder=5)
+    ax.scatter(X[~ok], Y[~ok], s=22, facecolor="white", edgecolor="black", zorder=5)
+    cb = fig.colorbar(matplotlib.cm.ScalarMappable(norm=vnorm, cmap=cmap), ax=ax, pad=0.02)
+    cb.set_label(BY_NAME["v_mm_s"].label + "  (bands between neighbouring v lines)")
+    cb.set_ticks(v if len(v) <= 12 else np.linspace(v.min(), v.max(), 6))
+    # one DEM run's noise: a cross in the lower left corner
+    nx, ny = float(np.median(grid["mfr_noise_sd"])), float(np.median(grid[f"{y}_noise_sd"]))
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    cx, cy = x0 + 0.08 * (x1 - x0) + nx, y1 - 0.1 * (y1 - y0) - ny
+    ax.errorbar([cx], [cy], xerr=[nx], yerr=[ny], color="darkred", capsize=3, lw=1.2, zorder=6)
+    ax.annotate(f"± one DEM run's noise SD\n(MFR {nx:.3f}, {SHORT.get(y, y)} {ny:.3f})", (cx + nx, cy),
+                xytext=(6, 0), textcoords="offset points", va="center", fontsize=7.5, color="darkred")
+    placed = []
+    for j in range(len(v)):
+        if j in v_lab:
+            end_label(ax, X[:, j], Y[:, j], f"v = {fmt(v[j])} mm/s", edge=mcolors.to_hex(cmap(vnorm(v[j]))),
+                      placed=placed)
+    for i in range(len(h)):
+        if i in h_lab:
+            end_label(ax, X[i], Y[i], f"h = {fmt(h[i])} um", colour="0.1", edge="0.3", placed=placed)
+    handles = [Line2D([], [], color=cmap(0.6), lw=2.2, label="constant blade speed v (solid)"),
+               Line2D([], [], color="0.15", lw=1.3, ls="--", label="constant layer thickness h (dashed)"),
+               Line2D([], [], marker="o", ls="", color="0.5", alpha=0.4, ms=9, label="± one model SD (ellipse)"),
+               Line2D([], [], marker="o", ls="", mfc="white", mec="black", ms=5, label="setting beyond the data")]
+    ax.legend(handles=handles, loc="lower right", fontsize=7.5, framealpha=0.9)
+    ax.set_xlabel(LABELS["mfr"])
+    ax.set_ylabel(LABELS.get(y, y))
+    ax.grid(alpha=0.3)
+    beyond = "" if ok.any() else "BEYOND THE DATA: "
+    title = ax.set_title(f"{beyond}Machine map at f = {fmt(f)}, d = {fmt(d_um)} um: h {fmt(h.min())}-{fmt(h.max())} um, "
+                 f"v {fmt(v.min())}-{fmt(v.max())} mm/s", fontsize=10)
+    note = support_note(fig, grid["supported"].to_numpy(), support, "settings")
+    paths = save_figure(fig, stem, grid)
+    return MapResult(paths, grid, {"y": y, "note": note, "title": title.get_text(), "n_unsupported": int((~ok).sum())})

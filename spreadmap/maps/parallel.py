@@ -1,0 +1,132 @@
+"""Parallel coordinates of the DEM sample (no surrogate): one polyline per usable case over the four
+parameters, coloured by normalised MFR (top) and PD (bottom), the best case drawn thick."""
+from __future__ import annotations
+
+from typing import Callable
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from matplotlib import colors as mcolors  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+
+from ..design import BY_NAME, NAMES, bounds  # noqa: E402
+from ..figures import save_figure  # noqa: E402
+from ..table import usable  # noqa: E402
+from .style import MapResult, fmt as _fmt  # noqa: E402
+
+
+def usable_cases(cases: pd.DataFrame) -> pd.DataFrame:
+    """Cases fit for statistics: status ok, not flagged, finite MFR and PD (where present)."""
+    keep = usable(cases)
+    for t in ("mfr", "pd"):
+        if t in cases:
+            keep &= np.isfinite(cases[t].to_numpy(float))
+    return cases.loc[keep]
+
+
+def best_case(
+    cases: pd.DataFrame,
+    mfr_min: float = 0.0,
+    score: Callable[[pd.DataFrame], np.ndarray] | None = None,
+) -> pd.Series:
+    """The best case of a table of (usable) cases.
+
+    Default rule: the highest PD among the cases with MFR >= ``mfr_min`` (a dense layer from a
+    setting that still flows).  With ``score`` given, the case with the highest
+    ``score(cases)`` among those same cases.  Raises ValueError if no case qualifies.
+    """
+    ok = cases[cases["mfr"].to_numpy(float) >= mfr_min]
+    if ok.empty:
+        raise ValueError(f"no case has MFR >= {mfr_min}")
+    value = np.asarray(score(ok), float) if score is not None else ok["pd"].to_numpy(float)
+    if not np.isfinite(value).any():
+        raise ValueError("no finite score")
+    return ok.iloc[int(np.nanargmax(value))]
+
+
+def parallel_coordinates(
+    cases: pd.DataFrame,
+    path_stem,
+    mfr_min: float = 0.0,
+    score: Callable[[pd.DataFrame], np.ndarray] | None = None,
+    ranges: dict | None = None,
+    n_ticks: int = 5,
+) -> MapResult:
+    """Parallel coordinates of a sample of DEM cases (the converged LDS sample).
+
+    Only usable cases (status ok, not flagged, finite MFR and PD) are drawn.  Axes: the four
+    parameters, each normalised to its design range (``design.bounds(ranges)``) and ticked in
+    physical units.  Top panel coloured by normalised MFR, bottom by normalised PD (min-max over
+    the drawn cases; the colour bars give the physical values too).  The best case (see
+    :func:`best_case`: ``mfr_min`` and ``score``) is drawn thick red and annotated.  CSV: the
+    drawn cases with their normalised values and a boolean column ``best``.
+    """
+    data = usable_cases(cases).copy()
+    if data.empty:
+        raise ValueError("no usable case to draw")
+    best = best_case(data, mfr_min=mfr_min, score=score)
+    low, high = bounds(ranges)
+    x = (data[list(NAMES)].to_numpy(float) - low) / (high - low)
+    for k, n in enumerate(NAMES):
+        data[f"{n}_norm"] = x[:, k]
+    for t in ("mfr", "pd"):
+        z = data[t].to_numpy(float)
+        span = np.ptp(z)
+        data[f"{t}_norm"] = (z - z.min()) / span if span > 0 else 0.5
+    data["best"] = data.index == best.name
+    xb = (best[list(NAMES)].to_numpy(float) - low) / (high - low)
+
+    xpos = np.arange(len(NAMES), dtype=float)
+    fig, axes = plt.subplots(2, 1, figsize=(12, 8.5), sharex=True)
+    cmap = plt.get_cmap("viridis")
+    for ax, t, name in ((axes[0], "mfr", "MFR"), (axes[1], "pd", "PD")):
+        c = data[f"{t}_norm"].to_numpy(float)
+        order = np.argsort(c)  # high values drawn last, on top
+        segs = [np.column_stack([xpos, row]) for row in x[order]]
+        alpha = float(np.clip(8.0 / np.sqrt(len(data)), 0.15, 0.9))
+        lc = LineCollection(segs, cmap=cmap, norm=mcolors.Normalize(0, 1), lw=1.0, alpha=alpha)
+        lc.set_array(c[order])
+        ax.add_collection(lc)
+        ax.plot(xpos, xb, color="white", lw=5.5, zorder=5)
+        ax.plot(xpos, xb, color="tab:red", lw=3.0, marker="o", ms=7, zorder=6,
+                label="best case")
+        for k, n in enumerate(NAMES):
+            ax.axvline(xpos[k], color="0.2", lw=1.0, zorder=3)
+            for tv in np.linspace(0, 1, n_ticks):
+                phys = low[k] + tv * (high[k] - low[k])
+                ax.plot([xpos[k] - 0.02, xpos[k]], [tv, tv], color="0.2", lw=1.0, zorder=3)
+                ax.text(xpos[k] - 0.03, tv, _fmt(phys), ha="right", va="center", fontsize=8,
+                        bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7),
+                        zorder=4)
+        z = data[t].to_numpy(float)
+        cb = fig.colorbar(plt.cm.ScalarMappable(norm=mcolors.Normalize(0, 1), cmap=cmap), ax=ax,
+                          pad=0.02)
+        cb.set_label(f"normalised {name} [-]\n(0 = {z.min():.3f}, 1 = {z.max():.3f})")
+        ax.set_ylim(-0.06, 1.06)
+        ax.set_yticks([])
+        ax.set_xlim(-0.35, len(NAMES) - 1 + 1.25)  # right margin holds the best-case box
+        ax.set_title(f"Cases coloured by normalised {name}", fontsize=10)
+        text = (f"best case{': ' + str(best['case_id']) if 'case_id' in best else ''}\n"
+                f"f = {best['f']:.3g}, d = {best['d_um']:.3g} um\n"
+                f"h = {best['h_um']:.3g} um, v = {best['v_mm_s']:.3g} mm/s\n"
+                f"MFR = {best['mfr']:.3f}, PD = {best['pd']:.3f}")
+        ax.annotate(text, (xpos[-1], xb[-1]), xytext=(xpos[-1] + 0.2, 0.5), textcoords="data",
+                    va="center", ha="left", fontsize=8.5, zorder=7,
+                    bbox=dict(boxstyle="round", fc="white",
+                              ec="tab:red", alpha=0.95),
+                    arrowprops=dict(arrowstyle="-", color="tab:red"))
+    axes[1].set_xticks(xpos, [BY_NAME[n].label for n in NAMES])
+    rule = ("highest score" if score is not None else "highest PD") + (
+        f" among cases with MFR >= {mfr_min:g}" if mfr_min > 0 else "")
+    fig.suptitle(f"Parallel coordinates of {len(data)} DEM cases; best case = {rule}",
+                 fontsize=11)
+    fig.tight_layout()
+    cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
+        "mfr", "pd"] + [f"{n}_norm" for n in NAMES] + ["mfr_norm", "pd_norm", "best"]
+    table = data[cols].reset_index(drop=True)
+    paths = save_figure(fig, path_stem, table)
+    return MapResult(paths, table, {"best": best})

@@ -1,0 +1,129 @@
+"""Powder maps at fixed machine settings (h, v).
+
+* ``powder_band_map`` (a): each target against d, one curve per friction value, the lowest and the
+  highest friction with their 95 % bands of the mean (model SD); stretches beyond the data dotted
+  and hatched. Below each, the change from the lowest to the highest friction with its 95 %
+  interval from joint draws: where that interval holds 0, the order of the friction curves (and
+  so any crossing of them) is not resolved by the data.
+* ``powder_cluster_map`` (b): in the MFR-y plane, one cluster of points per diameter, its points
+  the friction values, each with a cross of one model SD; open marks beyond the data.
+"""
+from __future__ import annotations
+
+import matplotlib
+import numpy as np
+from matplotlib import colors as mcolors
+from matplotlib.lines import Line2D
+
+from ..design import BY_NAME
+from ..figures import new_figure, save_figure
+from . import grids
+from .labels import end_label, right_labels
+from .style import HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
+
+DEFAULT_SUPPORT = {"max_distance": 1.5, "max_sd_ratio": 1.0}
+
+
+def powder_band_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: float = 6.1, n_d: int = 41,
+                    n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
+                    seed: int = 0) -> MapResult:
+    support = support or DEFAULT_SUPPORT
+    d = grids.values(d_values, n_d, "d_um", ranges)
+    fv = grids.values(f_values, n_f, "f", ranges)
+    targets = ["mfr", y]
+    grid = grids.evaluate(model, grids.grid_frame(f=fv, d_um=d, h_um=h_um, v_mm_s=v_mm_s), targets, support)
+    effect = grids.f_effect(model, targets, h_um, v_mm_s, d, fv[0], fv[-1], draws=draws, seed=seed)
+    shape = (len(fv), len(d))
+    ok = grid["supported"].to_numpy().reshape(shape)
+    cmap = matplotlib.colormaps["plasma"]
+    fcol = [cmap(0.8 * k / max(len(fv) - 1, 1)) for k in range(len(fv))]
+    fig = new_figure(12.5, 8.2)
+    axes = fig.subplots(2, 2, height_ratios=[2.2, 1], sharex=True)
+    for col, t in enumerate(targets):
+        ax = axes[0, col]
+        z = grid[t].to_numpy().reshape(shape)
+        s = grid[f"{t}_model_sd"].to_numpy().reshape(shape)
+        for k in (0, len(fv) - 1):
+            ax.fill_between(d, z[k] - 1.96 * s[k], z[k] + 1.96 * s[k], color=fcol[k], alpha=0.18, lw=0)
+        for k in range(len(fv)):
+            edge = k in (0, len(fv) - 1)
+            lw = 2.2 if edge else 1.0
+            ax.plot(d, np.where(ok[k], z[k], np.nan), color=fcol[k], lw=lw)
+            ax.plot(d, z[k], color=fcol[k], lw=lw * 0.7, ls=":")
+        beyond = ~ok.any(axis=0)
+        if beyond.any():
+            lo, hi = ax.get_ylim()
+            ax.fill_between(d, lo, hi, where=beyond, step="mid", zorder=0, **HATCH)
+            ax.set_ylim(lo, hi)
+        ax.set_ylabel(LABELS.get(t, t))
+        ax.set_xlim(d.min(), d.max() + 0.2 * np.ptp(d))
+        right_labels(ax, d[-1], z[:, -1], [f"f = {fmt(x)}" for x in fv], fcol)
+        ax.set_title(f"{SHORT.get(t, t)} against particle diameter; shaded: 95 % band of the mean "
+                     f"(f = {fmt(fv[0])}, {fmt(fv[-1])})", fontsize=9)
+        ax.grid(alpha=0.3)
+        ax2 = axes[1, col]
+        ch = effect[f"{t}_change"].to_numpy()
+        ax2.fill_between(d, effect[f"{t}_change_low"], effect[f"{t}_change_high"], color="0.6", alpha=0.35, lw=0,
+                         label="95 % interval (joint draws)")
+        ax2.plot(d, ch, color="k", lw=1.5, label=f"{SHORT.get(t, t)}(f = {fmt(fv[-1])}) - {SHORT.get(t, t)}(f = {fmt(fv[0])})")
+        ax2.axhline(0, color="darkred", lw=0.8)
+        resolved = (effect[f"{t}_change_low"] > 0) | (effect[f"{t}_change_high"] < 0)
+        ax2.set_title(f"effect of friction: resolved (interval excludes 0) at {int(resolved.sum())} of {len(d)} diameters",
+                      fontsize=9)
+        ax2.set_xlabel(BY_NAME["d_um"].label)
+        ax2.set_ylabel(f"change of {SHORT.get(t, t)} [-]")
+        ax2.grid(alpha=0.3)
+        ax2.legend(fontsize=7, loc="best")
+    handles = [Line2D([], [], color="0.3", lw=2, label="supported by the data"),
+               Line2D([], [], color="0.3", lw=1.4, ls=":", label="beyond the data")]
+    axes[0, 0].legend(handles=handles, fontsize=7.5, loc="best")
+    fig.suptitle(f"Powder map (a): friction f = {fmt(fv[0])}-{fmt(fv[-1])} as the diameter varies, "
+                 f"at h = {fmt(h_um)} um, v = {fmt(v_mm_s)} mm/s", fontsize=11)
+    note = support_note(fig, grid["supported"].to_numpy(), support)
+    table = grid.merge(effect, on="d_um", how="left")
+    paths = save_figure(fig, stem, table)
+    return MapResult(paths, table, {"note": note, "effect": effect})
+
+
+def powder_cluster_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: float = 6.1, n_d: int = 5,
+                       n_f: int = 7, d_values=None, f_values=None, ranges=None, support=None) -> MapResult:
+    support = support or DEFAULT_SUPPORT
+    d = grids.values(d_values, n_d, "d_um", ranges)
+    fv = grids.values(f_values, n_f, "f", ranges)
+    grid = grids.evaluate(model, grids.grid_frame(f=fv, d_um=d, h_um=h_um, v_mm_s=v_mm_s), ["mfr", y], support)
+    shape = (len(fv), len(d))
+    X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
+    sx, sy = grid["mfr_model_sd"].to_numpy().reshape(shape), grid[f"{y}_model_sd"].to_numpy().reshape(shape)
+    ok = grid["supported"].to_numpy().reshape(shape)
+    cmap = mcolors.LinearSegmentedColormap.from_list("vd", matplotlib.colormaps["viridis"](np.linspace(0, 0.9, 256)))
+    dnorm = mcolors.Normalize(d.min(), d.max())
+    sizes = 15 + 85 * (fv - fv.min()) / (np.ptp(fv) or 1.0)
+    fig = new_figure(8.6, 6.4)
+    ax = fig.subplots()
+    set_limits(ax, np.concatenate([(X - sx).ravel(), (X + sx).ravel()]),
+               np.concatenate([(Y - sy).ravel(), (Y + sy).ravel()]), pad=0.1, pad_right=0.22, pad_top=0.12)
+    cb = fig.colorbar(matplotlib.cm.ScalarMappable(norm=dnorm, cmap=cmap), ax=ax, pad=0.02)
+    cb.set_label(BY_NAME["d_um"].label)
+    placed = []
+    for j in range(len(d)):
+        c = cmap(dnorm(d[j]))
+        ax.errorbar(X[:, j], Y[:, j], xerr=sx[:, j], yerr=sy[:, j], fmt="none", ecolor=c, alpha=0.45, lw=0.8, zorder=2)
+        ax.plot(X[:, j], Y[:, j], color=c, lw=1.0, alpha=0.8, zorder=2)
+        ax.scatter(X[ok[:, j], j], Y[ok[:, j], j], s=sizes[ok[:, j]], color=c, edgecolor="black", lw=0.4, zorder=3)
+        ax.scatter(X[~ok[:, j], j], Y[~ok[:, j], j], s=sizes[~ok[:, j]], facecolor="white", edgecolor=c, lw=1.2,
+                   zorder=3)
+        end_label(ax, X[:, j], Y[:, j], f"d = {fmt(d[j])} um", at="start", fontsize=9, distance=10,
+                  edge=mcolors.to_hex(c), placed=placed)
+    handles = [Line2D([], [], marker="o", ls="-", color="0.5", mec="black", ms=5,
+                      label=f"{len(fv)} friction values {fmt(fv[0])}-{fmt(fv[-1])}, marker size grows with f"),
+               Line2D([], [], marker="+", ls="", color="0.4", ms=9, label="± one model SD"),
+               Line2D([], [], marker="o", ls="", mfc="white", mec="0.3", ms=6, label="beyond the data")]
+    ax.legend(handles=handles, loc="best", fontsize=7.5, framealpha=0.9)
+    ax.set_xlabel(LABELS["mfr"])
+    ax.set_ylabel(LABELS.get(y, y))
+    ax.set_title(f"Powder map (b): clusters of constant diameter as friction varies, at h = {fmt(h_um)} um, "
+                 f"v = {fmt(v_mm_s)} mm/s", fontsize=10)
+    ax.grid(alpha=0.3)
+    note = support_note(fig, grid["supported"].to_numpy(), support)
+    paths = save_figure(fig, stem, grid)
+    return MapResult(paths, grid, {"note": note})

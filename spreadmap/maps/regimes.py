@@ -1,0 +1,112 @@
+"""Regimes: where the DEM cases of each regime lie, and the surrogate's probability of each regime.
+
+Left: the usable DEM cases in the (h/d, v) plane coloured by their DEM regime. Right: over the
+(d, h) plane at a fixed friction and speed, the probability that a new DEM run falls in each
+regime (``grids.regime_probabilities``: the thresholds of ``metrics.classify`` on the predictive
+distribution of MFR and PD), drawn as the most probable regime's colour with contours of
+P(jamming) and P(short feed) at 0.1, 0.5 and 0.9; beyond the data hatched; the line h = d (a gap of
+one particle). ``counts``: DEM regime against the most probable regime at the cases' own settings
+(the final model on its training cases: a consistency check, not a validation).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib import colors as mcolors
+from matplotlib.lines import Line2D
+
+from ..design import BY_NAME, NAMES
+from ..figures import new_figure, save_figure
+from . import grids
+from .style import MapResult, fmt, support_note
+
+REGIMES = ("normal", "jamming", "short_feed")
+COLOURS = {"normal": "tab:green", "jamming": "tab:red", "short_feed": "tab:orange"}
+MARKERS = {"normal": "o", "jamming": "X", "short_feed": "s"}
+NAMES_LONG = {"normal": "normal extrusion", "jamming": "jamming", "short_feed": "short feed"}
+
+
+def most_probable(frame: pd.DataFrame) -> np.ndarray:
+    P = frame[["p_normal", "p_jamming", "p_short_feed"]].to_numpy()
+    return np.array(REGIMES, dtype=object)[np.argmax(P, axis=1)]
+
+
+def regime_counts(dem: np.ndarray, model: np.ndarray) -> pd.DataFrame:
+    return pd.DataFrame({"dem": [int((dem == r).sum()) for r in REGIMES],
+                         "surrogate": [int((model == r).sum()) for r in REGIMES],
+                         "both": [int(((dem == r) & (model == r)).sum()) for r in REGIMES]},
+                        index=pd.Index(REGIMES, name="regime"))
+
+
+def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
+                   f: float = 0.3, v_mm_s: float = 10.0, n_d: int = 60, n_h: int = 40, ranges=None,
+                   support=None) -> MapResult:
+    support = support or {"max_distance": 1.5, "max_sd_ratio": 1.0}
+    known = cases["regime"].isin(REGIMES).to_numpy()
+    data = cases.loc[known].copy()
+    missing = [t for t in grids.REGIME_TARGETS if t not in model.targets]
+    if missing:
+        raise ValueError(f"the regime map needs the surrogate to model {list(grids.REGIME_TARGETS)}; it lacks "
+                         f"{missing} (config surrogate.targets, or a results table without those columns)")
+    targets = list(grids.REGIME_TARGETS)
+    at_cases = grids.regime_probabilities(grids.evaluate(model, data[list(NAMES)], targets, support), rules)
+    for c in ("p_normal", "p_jamming", "p_short_feed"):
+        data[c] = at_cases[c].to_numpy()
+    data["regime_pred"] = most_probable(at_cases)
+    data["h_over_d"] = data["h_um"] / data["d_um"]
+    counts = regime_counts(data["regime"].to_numpy(), data["regime_pred"].to_numpy())
+
+    d = grids.values(None, n_d, "d_um", ranges)
+    h = grids.values(None, n_h, "h_um", ranges)
+    plane = grids.regime_probabilities(
+        grids.evaluate(model, grids.grid_frame(f=f, d_um=d, h_um=h, v_mm_s=v_mm_s), targets, support), rules)
+    shape = (len(d), len(h))  # d varies slowest
+    fig = new_figure(14.5, 5.8)
+    ax0, ax1 = fig.subplots(1, 2)
+    for r in REGIMES:
+        m = (data["regime"] == r).to_numpy()
+        ax0.scatter(data["h_over_d"][m], data["v_mm_s"][m], c=COLOURS[r], marker=MARKERS[r], s=40,
+                    edgecolor="white", lw=0.4, label=f"{NAMES_LONG[r]} ({int(m.sum())})", zorder=3)
+    ax0.set_xlabel("gap to diameter ratio h/d [-]")
+    ax0.set_ylabel(BY_NAME["v_mm_s"].label)
+    ax0.set_title(f"DEM regimes of {len(data)} cases", fontsize=10)
+    ax0.grid(alpha=0.3)
+    ax0.legend(fontsize=8, loc="best")
+
+    regime_idx = np.array([REGIMES.index(r) for r in most_probable(plane)]).reshape(shape)
+    cmap = mcolors.ListedColormap([mcolors.to_rgba(COLOURS[r], 0.35) for r in REGIMES])
+    ax1.pcolormesh(d, h, regime_idx.T, cmap=cmap, vmin=-0.5, vmax=2.5, shading="nearest")
+    for col, name in (("p_jamming", "jamming"), ("p_short_feed", "short_feed")):
+        P = plane[col].to_numpy().reshape(shape).T
+        if P.max() >= 0.1 and P.min() <= 0.9:
+            cs = ax1.contour(d, h, P, levels=[0.1, 0.5, 0.9], colors=COLOURS[name], linestyles=["--", "-", "--"],
+                             linewidths=[1, 2, 1])
+            ax1.clabel(cs, fmt=lambda p, n=name: f"P({NAMES_LONG[n]}) {p:.1f}", fontsize=7)
+    ok = plane["supported"].to_numpy().reshape(shape).T
+    if (~ok).any():
+        ax1.contourf(d, h, (~ok).astype(float), levels=[0.5, 1.5], colors="none", hatches=["////"])
+    ax1.plot(d, d, color="k", lw=1, ls=":")
+    ax1.set_ylim(h.min(), h.max())
+    for r in REGIMES:
+        m = (data["regime"] == r).to_numpy()
+        ax1.scatter(data["d_um"][m], data["h_um"][m], c=COLOURS[r], marker=MARKERS[r], s=16, edgecolor="k",
+                    lw=0.3, zorder=4)
+    handles = [Line2D([], [], color=COLOURS["jamming"], lw=2, label="P(jamming) = 0.5 (dashed 0.1, 0.9)"),
+               Line2D([], [], color=COLOURS["short_feed"], lw=2, label="P(short feed) = 0.5 (dashed 0.1, 0.9)"),
+               Line2D([], [], color="k", ls=":", label="h = d (gap of one particle)"),
+               Line2D([], [], marker="o", ls="", color="0.4", ms=4, label="DEM cases (all f, v)")]
+    ax1.legend(handles=handles, fontsize=7.5, loc="lower right", framealpha=0.9)
+    ax1.set_xlabel(BY_NAME["d_um"].label)
+    ax1.set_ylabel(BY_NAME["h_um"].label)
+    ax1.set_title(f"Most probable regime of a new run at f = {fmt(f)}, v = {fmt(v_mm_s)} mm/s "
+                  f"(shade), probability contours", fontsize=10)
+    agree = int(counts["both"].sum())
+    fig.suptitle(f"Regimes: the surrogate's most probable regime matches the DEM at {agree} of {len(data)} "
+                 f"training cases; {int((~known).sum())} cases without a regime left out", fontsize=11)
+    note = support_note(fig, plane["supported"].to_numpy(), support, "points of the (d, h) plane")
+    cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
+        "h_over_d", "mfr", "pd", "regime", "p_normal", "p_jamming", "p_short_feed", "regime_pred"]
+    table = data[[c for c in cols if c in data]].reset_index(drop=True)
+    paths = save_figure(fig, stem, table)
+    return MapResult(paths, table, {"counts": counts, "excluded": int((~known).sum()), "agree": agree,
+                                    "plane": plane, "note": note})

@@ -1,0 +1,59 @@
+"""What every map shares: axis labels, the support note, limits, and the result record."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+LABELS = {"mfr": "mass flow rate MFR [-]", "pd": "packing density PD [-]",
+          "layer_packing": "layer packing fraction [-]", "coverage": "floor coverage [-]",
+          "roughness_d": "surface roughness / d [-]", "thickness_ratio": "layer thickness / h [-]"}
+SHORT = {"mfr": "MFR", "pd": "PD", "layer_packing": "layer packing", "coverage": "coverage",
+         "roughness_d": "roughness/d", "thickness_ratio": "thickness/h"}
+HATCH = dict(hatch="////", facecolor="none", edgecolor="0.55", lw=0.0)
+
+
+@dataclass
+class MapResult:
+    """What a map function wrote: the file paths, the table saved as CSV, and extras."""
+
+    paths: dict
+    data: pd.DataFrame
+    info: dict = field(default_factory=dict)
+
+
+def fmt(value: float, digits: int = 4) -> str:
+    return f"{value:.{digits}g}"
+
+
+def support_rule(support: dict) -> str:
+    return (f"beyond the data = farther than {fmt(support['max_distance'], 3)} case spacings from every usable case, "
+            f"or model SD > {fmt(support['max_sd_ratio'], 3)} x the noise SD of one run")
+
+
+def support_note(fig, supported: np.ndarray, support: dict, what: str = "grid points") -> str:
+    """Write at the bottom of the figure how much of the map lies beyond the data; return it."""
+    n, k = len(supported), int((~np.asarray(supported)).sum())
+    if k == 0:
+        text = f"all {n} {what} supported by the data ({support_rule(support)})"
+        colour = "0.3"
+    else:
+        text = (f"{k} of {n} {what} drawn BEYOND THE DATA (hatched / open marks): "
+                f"{support_rule(support)}")
+        colour = "darkred"
+    fig.text(0.5, -0.01, text, ha="center", va="top", fontsize=8, color=colour)
+    return text
+
+
+def set_limits(ax, x, y, pad=0.08, pad_right=None, pad_top=None) -> None:
+    x = np.asarray(x, float)[np.isfinite(x)]
+    y = np.asarray(y, float)[np.isfinite(y)]
+    if x.size == 0 or y.size == 0:
+        return
+    dx, dy = max(np.ptp(x), 1e-3), max(np.ptp(y), 1e-3)
+    ax.set_xlim(x.min() - pad * dx, x.max() + (pad if pad_right is None else pad_right) * dx)
+    ax.set_ylim(y.min() - pad * dy, y.max() + (pad if pad_top is None else pad_top) * dy)
+
+

@@ -1,0 +1,32 @@
+"""The noise-aware surrogate of the DEM results, its validation, the saved model and prediction.
+
+Submodules, one job each: ``settings`` (config, no scikit-learn), ``training_rows`` (usable cases,
+partitions, per-case noise), ``features`` (model inputs), ``noise`` (a new run's noise SD),
+``models`` (GP and MLP ensemble), ``validation`` (repeated k-fold numbers), ``study`` (the reference
+study's protocol), ``fitting`` (all of it on a table), ``saved_model`` (file and loading),
+``prediction`` (points in, mean and SDs out), ``cli`` (scripts/predict.py), ``plots``.
+
+Importing this package imports no scikit-learn: config validation reads ``make_config`` from here.
+The other names below are loaded on first use.
+"""
+from __future__ import annotations
+
+from importlib import import_module
+
+from .settings import make_config
+
+_LAZY = {
+    "fit_surrogate": "fitting", "SurrogateResult": "fitting",
+    "SurrogateModel": "saved_model", "ModelFileError": "saved_model", "load_model": "saved_model",
+    "save_model": "saved_model", "sidecar_path": "saved_model",
+    "predict": "prediction", "OutOfRangeWarning": "prediction", "as_points": "prediction",
+    "cli_main": "cli", "snakemake_main": "cli",
+}
+
+__all__ = ["make_config", *_LAZY]
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        return getattr(import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

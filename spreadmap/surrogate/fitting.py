@@ -1,0 +1,152 @@
+"""Train and validate the surrogate on a results table (one function, ``fit_surrogate``).
+
+1. The usable cases and the targets (``training_rows``, ``settings.resolve_targets``).
+2. Per target, both models (GP and MLP) validated by repeated k-fold (``validation``), every choice
+   inside the folds.
+3. Per target, the model that draws the maps: ``surrogate.model`` (gp, mlp), or ``best`` = the
+   lower pooled out-of-fold RMSE. (``best`` picks between two validated candidates on the same
+   folds, so its own score is slightly optimistic; both numbers are reported.)
+4. The final model of each target trained on every usable case.
+5. The study's protocol on the same cases, reported beside (``study``).
+6. A learning curve: the map model's cross-validated RMSE on prefixes of the LDS sequence.
+"""
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import platform
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..design import NAMES, bounds
+from . import study, validation
+from .models import make_model
+from .saved_model import FORMAT, SurrogateModel
+from .settings import make_config, resolve_targets
+from .training_rows import TrainingRows, select
+
+KINDS = ("gp", "mlp")
+
+
+@dataclass
+class SurrogateResult:
+    config: dict
+    rows: TrainingRows
+    validation: pd.DataFrame        # one row per (target, model): summarise() numbers, map_model flag
+    oof: pd.DataFrame               # out-of-fold predictions, columns of validation.out_of_fold + target, model
+    study_runs: pd.DataFrame
+    study_summary: pd.DataFrame
+    learning: pd.DataFrame          # target, model, n_cases, rmse, rmse_low, rmse_high, noise_sd
+    model: SurrogateModel
+    notes: list = field(default_factory=list)
+
+
+def _min_cases(cfg) -> int:
+    return max(8, 2 * int(cfg["cv_folds"]))
+
+
+def sha256_rows(frame: pd.DataFrame, targets) -> str:
+    """SHA-256 of the training rows (case_id, inputs, targets; sorted by case_id; repr floats)."""
+    cols = ["case_id", *NAMES, *targets]
+    r = frame[cols].sort_values("case_id", kind="mergesort")
+    lines = [",".join(cols)] + [",".join([str(rec[0]), *(repr(float(x)) for x in rec[1:])])
+                                for rec in r.itertuples(index=False)]
+    return hashlib.sha256(("\n".join(lines) + "\n").encode()).hexdigest()
+
+
+def versions() -> dict:
+    import joblib
+    import scipy
+    import sklearn
+
+    return {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
+            "sklearn": sklearn.__version__, "pandas": pd.__version__, "joblib": joblib.__version__}
+
+
+def _clean(obj):
+    return json.loads(pd.Series([obj]).to_json(orient="values"))[0] if obj is not None else None
+
+
+def fit_surrogate(df: pd.DataFrame, config=None, source_path=None, ranges=None, log=print) -> SurrogateResult:
+    cfg = make_config(config)
+    targets = resolve_targets(cfg["targets"], df.columns)
+    rows = select(df, targets)
+    if len(rows) < _min_cases(cfg):
+        raise ValueError(f"too few usable cases to train and validate: {len(rows)} usable "
+                         f"(need >= {_min_cases(cfg)} for {cfg['cv_folds']}-fold validation); "
+                         f"excluded: {rows.exclusions}")
+    notes = []
+    X = rows.X
+    val_rows, oof_parts = [], []
+    for t in targets:
+        for kind in KINDS:
+            oof = validation.out_of_fold(rows, t, kind, cfg)
+            s = validation.summarise(oof, float(cfg["interval"]), int(cfg["seed"]))
+            val_rows.append({"target": t, "model": kind, **s})
+            oof_parts.append(oof.assign(target=t, model=kind))
+            log(f"validated {kind} on {t}: RMSE {s['rmse']:.4g} [{s['rmse_low']:.4g}, {s['rmse_high']:.4g}] "
+                f"vs noise SD {s['noise_sd']:.4g} ({s['noise_source']}); coverage {s['coverage']:.3f}")
+    val = pd.DataFrame(val_rows)
+    chosen = {}
+    for t in targets:
+        v = val[val["target"] == t].set_index("model")
+        chosen[t] = cfg["model"] if cfg["model"] != "best" else str(v["rmse"].idxmin())
+    val["map_model"] = [chosen[t] == m for t, m in zip(val["target"], val["model"])]
+
+    models = {}
+    for t in targets:
+        models[t] = make_model(chosen[t], cfg, final=True).fit(X, rows.y(t), rows.sd(t))
+        log(f"final {chosen[t]} model of {t} on {len(rows)} cases: {models[t].describe()}")
+
+    runs = study.run_protocol(rows, targets, cfg)
+    summ = study.summary(runs)
+    learning = learning_curve(rows, targets, chosen, cfg, notes)
+
+    low, high = bounds(ranges)
+    metadata = {
+        "format": FORMAT, "targets": targets, "names": list(NAMES),
+        "map_model": chosen, "final_models": {t: models[t].describe() for t in targets},
+        "config": cfg, "n_usable": len(rows), "exclusions": rows.exclusions,
+        "n_train": int(runs["n_train"].iloc[0]), "n_test": int(runs["n_test"].iloc[0]),  # the study's one split
+        "noise_columns": {t: rows.sd(t) is not None for t in targets},
+        "training_rows_sha256": sha256_rows(rows.frame, targets),
+        "source_path": str(source_path) if source_path else None,
+        "source_sha256": hashlib.sha256(Path(source_path).read_bytes()).hexdigest() if source_path else None,
+        "design_ranges": {n: [float(a), float(b)] for n, a, b in zip(NAMES, low, high)},
+        "training_ranges": {n: [float(X[:, j].min()), float(X[:, j].max())] for j, n in enumerate(NAMES)},
+        "validation": _clean(val.to_dict("records")),
+        "study": _clean(summ.to_dict("records")),
+        "versions": versions(), "notes": notes,
+    }
+    model = SurrogateModel(targets=tuple(targets), models=models, train_X=X, design_low=low, design_high=high,
+                           metadata=metadata)
+    oof = pd.concat(oof_parts, ignore_index=True)
+    return SurrogateResult(cfg, rows, val, oof, runs, summ, learning, model, notes)
+
+
+def learning_curve(rows: TrainingRows, targets, chosen: dict, cfg: dict, notes: list) -> pd.DataFrame:
+    """Cross-validated RMSE (one k-fold repeat) of each target's map model on LDS prefixes."""
+    cols = ["target", "model", "n_cases", "rmse", "rmse_low", "rmse_high", "noise_sd", "noise_source"]
+    frame = rows.frame
+    if not cfg["learning_curve"] or "index" not in frame:
+        return pd.DataFrame(columns=cols)
+    in_lds = (frame["sweep"].astype(str) == "lds").to_numpy() if "sweep" in frame else np.ones(len(frame), bool)
+    index = pd.to_numeric(frame["index"], errors="coerce").to_numpy(float)
+    n_total = int(in_lds.sum())
+    sizes = sorted({s for s in (n_total // 4, n_total // 2, n_total) if s >= _min_cases(cfg)})
+    out = []
+    order = np.sort(index[in_lds])
+    for n in sizes:
+        subset = in_lds & (index <= order[n - 1])
+        for t in targets:
+            oof = validation.out_of_fold(rows, t, chosen[t], cfg, repeats=1, subset=subset)
+            s = validation.summarise(oof, float(cfg["interval"]), int(cfg["seed"]))
+            out.append({"target": t, "model": chosen[t], "n_cases": int(subset.sum()),
+                        **{k: s[k] for k in cols[3:]}})
+    if not out:
+        notes.append(f"learning curve skipped: {n_total} LDS cases, fewer than {_min_cases(cfg)} per prefix")
+    return pd.DataFrame(out, columns=cols)

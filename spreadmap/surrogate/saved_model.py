@@ -1,0 +1,122 @@
+"""The saved surrogate: one fitted model per target, the cases it was trained on, its metadata.
+
+The file is a joblib pickle (load only files you trust); a JSON sidecar beside it holds the
+metadata for people and tools. ``load_model`` turns every way a file can fail to be a surrogate of
+this version (missing, truncated, corrupt, foreign, older format) into one ``ModelFileError`` line.
+"""
+from __future__ import annotations
+
+import json
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..design import NAMES
+from ..files import atomic_path
+
+FORMAT = "spreadmap-surrogate/2"
+
+
+class ModelFileError(ValueError):
+    """A model file that cannot be used: the message says which file and why, in one line."""
+
+
+@dataclass
+class SurrogateModel:
+    """Per-target fitted models (``models.GPModel`` or ``models.MLPModel``) and the training cases."""
+
+    targets: tuple
+    models: dict
+    train_X: np.ndarray                 # usable cases' inputs, physical units, NAMES order
+    design_low: np.ndarray
+    design_high: np.ndarray
+    metadata: dict = field(default_factory=dict)
+    format: str = FORMAT
+    names: tuple = NAMES
+
+    # ---- where the data are -------------------------------------------------------------------
+    def unit(self, X) -> np.ndarray:
+        return (np.asarray(X, float) - self.design_low) / (self.design_high - self.design_low)
+
+    def spacing(self) -> float:
+        """Median distance from a training case to its nearest other case (unit design cube)."""
+        U = self.unit(self.train_X)
+        d, _ = cKDTree(U).query(U, k=2)
+        return float(np.median(d[:, 1]))
+
+    def data_distance(self, X) -> np.ndarray:
+        """Distance to the nearest training case, in units of the cases' median spacing."""
+        d, _ = cKDTree(self.unit(self.train_X)).query(self.unit(X), k=1)
+        return d / self.spacing()
+
+    def outside_design(self, X) -> np.ndarray:
+        X = np.asarray(X, float)
+        return (X < self.design_low) | (X > self.design_high)
+
+    # ---- predictions --------------------------------------------------------------------------
+    def predict_stats(self, X) -> dict:
+        """target -> (mean, model SD, SD of a new DEM run) at X (n, 4)."""
+        return {t: self.models[t].predictive(np.asarray(X, float)) for t in self.targets}
+
+    def draws(self, X, n: int, seed: int = 0, targets=None) -> dict:
+        """target -> (n, len(X)) draws of the mean function (GP posterior or MLP members)."""
+        rng = np.random.default_rng(seed)
+        return {t: self.models[t].draws(np.asarray(X, float), n, rng) for t in (targets or self.targets)}
+
+    def kind(self, target: str) -> str:
+        return self.models[target].kind
+
+    def __call__(self, points) -> np.ndarray:
+        """The package's predictor convention: (n, 4) physical -> (n, 2) mean MFR and PD."""
+        X = np.asarray(points, float)
+        return np.column_stack([self.models[t].latent(X)[0] for t in ("mfr", "pd")])
+
+
+def sidecar_path(path) -> Path:
+    path = Path(path)
+    return path.with_suffix(".json") if path.suffix == ".joblib" else path.with_name(path.name + ".json")
+
+
+def save_model(model: SurrogateModel, path) -> tuple[Path, Path]:
+    """joblib file of the model and a JSON sidecar of its metadata, each written atomically."""
+    import joblib
+
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            joblib.dump(model, fh)
+    side = sidecar_path(path)
+    with atomic_path(side) as tmp:
+        tmp.write_text(json.dumps(model.metadata, indent=2, sort_keys=True, allow_nan=False) + "\n")
+    return path, side
+
+
+def load_model(path) -> SurrogateModel:
+    """Load a saved surrogate. Any file that is not one (missing, corrupt, foreign, older format)
+    raises ModelFileError with a one-line reason; a different scikit-learn version warns."""
+    import joblib
+    import sklearn
+
+    path = Path(path)
+    if not path.is_file():
+        raise ModelFileError(f"surrogate model file not found: {path}")
+    try:
+        model = joblib.load(path)
+    except Exception as error:  # noqa: BLE001  unpickling foreign bytes can raise anything (struct.error, ...)
+        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ModelFileError(f"{path} is not a readable spreadmap surrogate ({type(error).__name__}: "
+                             f"{reason[:200]}); retrain it with `snakemake results/surrogate/model.joblib`") from None
+    if not isinstance(model, SurrogateModel):
+        raise ModelFileError(f"{path} does not hold a spreadmap surrogate (it holds a {type(model).__name__})")
+    if getattr(model, "format", None) != FORMAT:
+        raise ModelFileError(f"{path} is a surrogate of format {getattr(model, 'format', '?')!r}, this code reads "
+                             f"{FORMAT!r}; retrain it")
+    saved = model.metadata.get("versions", {}).get("sklearn")
+    if saved and saved != sklearn.__version__:
+        warnings.warn(f"{path} was trained with scikit-learn {saved}, running {sklearn.__version__}; "
+                      "predictions may differ", UserWarning, stacklevel=2)
+    return model
+
