@@ -51,7 +51,7 @@ def test_main_job_writes_every_analysis_output(finished_run):
     assert meta["source_sha256"] == hashlib.sha256(source.read_bytes()).hexdigest()
     assert meta["n_train"] + meta["n_test"] == meta["n_usable"] > 0
     predictions = (wf / "surrogate" / "predictions.csv").read_text()
-    assert {"mfr_model_sd", "mfr_run_sd"} <= set(predictions)
+    assert {"mfr_model_sd", "mfr_run_sd"} <= set(predictions.splitlines()[0].split(","))
 
 
 def test_vtk_written_when_asked(finished_run):
