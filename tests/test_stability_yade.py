@@ -43,10 +43,13 @@ def test_corner_case_is_stable(corner_runs, config, name):
                                    "peak_overlap_ratio", "max_speed", "final_ke_per_mgd", "rolled_off_particles")})
     assert m["time_step_ratio"] == pytest.approx(config["presets"]["smoke"]["dt_factor"])
     assert m["escaped_particles"] == 0  # nothing through a wall or the floor
-    assert m["peak_overlap_ratio"] < 0.02  # overlaps stay small (rigid-particle limit)
+    # overlaps stay small (rigid-particle limit): below 3 % R, well inside the 5 % R flag. (Below 2 %
+    # when the record sampled every 1000 steps; read at an eighth of a contact it catches each
+    # impact's peak, up to 2.1 % R at these corners.)
+    assert m["peak_overlap_ratio"] < 0.03
     # ... in every phase, and the whole run's peak is the largest of the phases' peaks
     by_phase = [m[f"peak_overlap_{phase}"] for phase in PHASES]
-    assert all(0.0 < peak < 0.02 for peak in by_phase) and max(by_phase) == m["peak_overlap_ratio"]
+    assert all(0.0 < peak < 0.03 for peak in by_phase) and max(by_phase) == m["peak_overlap_ratio"]
     assert m["max_speed"] < 0.5  # a blow-up reaches hundreds of m/s; gravity and blade give < 0.3
     assert m["final_ke_per_mgd"] < 5.0  # final kinetic energy below lifting every sphere 5 diameters
     assert 0.0 <= m["mfr"] <= DENSEST_PACKING
@@ -113,13 +116,15 @@ def test_unsafe_forced_step_refused_before_anything_runs(config):
 
 
 def test_rolling_resistance_option_runs_and_stops_rolling(config, tmp_path):
-    """Switched on, Mindlin's rolling moment (ScGeom6D) damps the free rolling of the deposit:
-    less kinetic energy at the end and no more spheres rolling off the floor than without it."""
+    """Switched on, Mindlin's rolling moment (ScGeom6D) damps the free rolling of the deposit on
+    the study's flat floor: less kinetic energy at the end and no more spheres rolling off the
+    floor than without it."""
     import copy
 
     runs = {}
     for enabled in (False, True):
         cfg = copy.deepcopy(config)
+        cfg["scene"]["substrate"]["kind"] = "flat"
         cfg["scene"]["rolling_resistance"]["enabled"] = enabled
         params = case_params(cfg, {"f": 0.3, "d_um": 40.0, "h_um": 65.0, "v_mm_s": 10.0}, "smoke")
         assert params["rolling_resistance"] is enabled and params["rolling_stiffness"] > 0

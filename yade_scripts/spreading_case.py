@@ -296,8 +296,10 @@ def end_state():
     `simulated_time` are the counters after it (YADE adds dt to time and 1 to iter at its end);
     positions and velocities are final already (NewtonIntegrator has run in this step)."""
     on_floor = [b for b in spheres() if x_lo <= b.state.pos[0] <= x_hi]
-    escaped = sum(1 for b in on_floor  # through a side wall or the floor, or thrown far upwards
-                  if not (-R <= b.state.pos[1] <= W + R and -R <= b.state.pos[2] <= z_hi))
+    # through a side wall or the floor (its top face at floor_top: under a rough substrate, spheres
+    # that rolled beyond the substrate's end rest on it), or thrown far upwards
+    escaped = sum(1 for b in on_floor
+                  if not (-R <= b.state.pos[1] <= W + R and floor_top - R <= b.state.pos[2] <= z_hi))
     return {"steps": O.iter + 1, "simulated_time": O.time + O.dt,
             "rolled_off": len(sphere_ids) - len(on_floor),  # beyond the ends of the floor, falling
             "escaped": escaped, "max_speed": max_speed(), "kinetic_energy": utils.kineticEnergy()}
