@@ -1,12 +1,12 @@
-"""Tests of spreadmap.sampling_study (no DEM) and of its figure."""
+"""Tests of spreadmap.convergence.sampling_study (no DEM) and of its figure."""
 import json
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from spreadmap import convergence_plots as cp
-from spreadmap import sampling_study as ss
+from spreadmap.convergence import plots as cp
+from spreadmap.convergence import sampling_study as ss
 from spreadmap.design import bounds
 
 
@@ -104,7 +104,6 @@ def test_summary_medians_censoring_and_ratios():
     assert rat["lattice_over_lds"] == pytest.approx(10.0) and rat["lattice_over_lds_kind"] == "ratio"
     assert rat["random_over_lds"] == pytest.approx(10.0)
     assert rat["random_over_lds_kind"] == "lower bound"
-    json.dumps(ss.StudyResult(tab, summ.reset_index(), ss.ratios(summ.reset_index())).to_dict())
 
 
 def test_sampling_study_plot_writes_files(small_study, tmp_path):

@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import NullFormatter
 
-from . import convergence as cv
-from .figures import new_figure, save_figure
-from .table import usable
+from . import study_rule as cv
+from ..figures import new_figure, save_figure
+from ..table import usable
 
 TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
 STAT_LABELS = {
