@@ -73,6 +73,8 @@ def settings(cfg: Mapping | None) -> dict[str, Any]:
                 raise ValueError(f"config key 'converge.ci.halfwidth': unknown statistics {sorted(bad)}; "
                                  f"allowed: {list(STATISTICS)}")
             out["ci"]["halfwidth"].update(hw)
+            # null drops a statistic from the criterion (e.g. kurtosis, whose CI narrows slowly)
+            out["ci"]["halfwidth"] = {k: v for k, v in out["ci"]["halfwidth"].items() if v is not None}
         out[key].update(sub)
     if "stop_on" in cfg:
         stop_on = list(cfg["stop_on"])

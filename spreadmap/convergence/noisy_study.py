@@ -155,14 +155,17 @@ def run(methods: Sequence[str] = ("lds", "random", "lattice", "active"),
         noises: Sequence[str] = tuple(NOISE_MODELS), seeds: Sequence[int] = range(8),
         n_max: int = 256, start: int = 32, batch: int = 16,
         checkpoints: Sequence[int] | None = None, truth: Callable = mfr_like,
-        n_candidates: int = 2048, log: Callable[[str], None] | None = None) -> pd.DataFrame:
-    """The tidy table: method, noise, seed, n, map_rmse, box_rmse (one row per checkpoint)."""
-    if checkpoints is None:  # every other batch (the active design fits at every batch anyway)
-        checkpoints = [n for n in range(start, n_max + 1, 2 * batch)]
+        n_candidates: int = 2048, log: Callable[[str], None] | None = None,
+        partial: str | Path | None = None) -> pd.DataFrame:
+    """The tidy table: method, noise, seed, n, map_rmse, box_rmse, cpu_s (one row per checkpoint).
+
+    ``partial``: a CSV rewritten after every seed (the rows so far)."""
+    if checkpoints is None:  # every batch
+        checkpoints = [n for n in range(start, n_max + 1, batch)]
     lattice_n = [k**len(NAMES) for k in range(2, 12) if k**len(NAMES) <= n_max]
     rows = []
-    for noise in noises:
-        for seed in seeds:
+    for seed in seeds:  # seeds outermost: a run cut short has every design and noise at equal seeds
+        for noise in noises:
             for method in methods:
                 t = time.process_time()
                 cps = lattice_n if method == "lattice" else list(checkpoints)
@@ -170,6 +173,8 @@ def run(methods: Sequence[str] = ("lds", "random", "lattice", "active"),
                     rows.append({"method": method, "noise": noise, "seed": int(seed), **r})
                 if log:
                     log(f"{noise} seed {seed} {method}: {time.process_time() - t:.1f} CPU s")
+        if partial is not None:
+            pd.DataFrame(rows).to_csv(partial, index=False)
     return pd.DataFrame(rows)
 
 
@@ -209,16 +214,17 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="output directory (table CSVs, figure, run.json)")
     ap.add_argument("--seeds", type=int, default=8)
-    ap.add_argument("--n-max", type=int, default=256)
-    ap.add_argument("--targets", type=float, nargs="+", default=[0.006, 0.004])
+    ap.add_argument("--n-candidates", type=int, default=2048)
+    ap.add_argument("--n-max", type=int, default=128)
+    ap.add_argument("--targets", type=float, nargs="+", default=[0.01, 0.007, 0.005])
     ap.add_argument("--methods", nargs="+", default=["lds", "random", "lattice", "active"])
     ap.add_argument("--noises", nargs="+", default=list(NOISE_MODELS))
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t0, c0 = time.time(), time.process_time()
-    table = run(args.methods, args.noises, range(args.seeds), n_max=args.n_max,
-                log=lambda s: print(s, flush=True))
+    table = run(args.methods, args.noises, range(args.seeds), n_max=args.n_max, n_candidates=args.n_candidates,
+                log=lambda s: print(s, flush=True), partial=out / "noisy_study_runs.partial.csv")
     table.to_csv(out / "noisy_study_runs.csv", index=False)
     needed = pd.concat([cases_needed(table, t) for t in args.targets], ignore_index=True)
     summ = summarise(needed)

@@ -101,9 +101,13 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
         "stop": reason is not None, "reason": reason or "criteria not met yet",
         "criteria": {**tracker.summary(), "at_this_batch": map_criteria.to_json(result)},
         "study_rule": _study_rule(table, targets, s, n, tolerance, floors),
+        "study_rule_path": list((prev_step or {}).get("study_rule_path", [])),
         "next_n": None, "next_batch": [],
         "settings": {k: v for k, v in s.items() if k != "criteria"},
+        "study_rule_tolerance": float(tolerance),
     }
+    record["study_rule_path"].append({"n": int(n), "max_change": record["study_rule"]["max_change_now"],
+                                      "streak": record["study_rule"]["streak_now"]})
     if reason is None:
         size = min(int(s["batch"]), int(s["budget"]) - n)
         if s["sampling"] == "lds":
