@@ -65,9 +65,11 @@ checkpoint converge_step:
 
 
 rule converge:
-    """Where the run stopped and why: the criteria, the batch at which each held, the path."""
+    """Where the run stopped and why: the criteria, the batch at which each held, the path; and
+    the run's results table."""
     input:
         converge_final_step,
+        "results/converge/table.csv",
     output:
         stopped="results/converge/stopped.json",
         summary="results/converge/summary.txt",
@@ -79,3 +81,32 @@ rule converge:
         "../envs/analysis.yaml"
     script:
         "../scripts/converge_summary.py"
+
+
+def converge_final_cases():
+    """Case ids of the whole converge run, in run order, with the batch each came in."""
+    final = converge_final_step(None)
+    n = int(final.rsplit("_", 1)[1].split(".")[0])
+    ids, _ = converge_chain(n)
+    start, batch = GROW.get("start", 32), GROW.get("batch", 16)
+    return [(cid, 0 if i < start else 1 + (i - start) // batch) for i, cid in enumerate(ids)]
+
+
+rule converge_table:
+    """The results table of the converge run (every case, in run order, its batch): what a
+    surrogate and the maps trained on the converged sample read."""
+    input:
+        step=converge_final_step,
+        metrics=lambda wc: [f"results/cases/{cid}/metrics.json" for cid, _ in converge_final_cases()],
+        benchmarks=lambda wc: [f"results/cases/{cid}/benchmark.tsv" for cid, _ in converge_final_cases()],
+    output:
+        table="results/converge/table.csv",
+    params:
+        labels=lambda wc: [{"sweep": "converge", "index": i, "batch": b} for i, (_, b) in enumerate(converge_final_cases())],
+    log:
+        "logs/converge/table.log",
+    localrule: True
+    conda:
+        "../envs/analysis.yaml"
+    script:
+        "../scripts/results_table.py"
