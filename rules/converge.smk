@@ -84,12 +84,15 @@ rule converge:
 
 
 def converge_final_cases():
-    """Case ids of the whole converge run, in run order, with the batch each came in."""
+    """Case ids of the whole converge run, in run order, with the batch each came in and
+    whether it is an LDS case (the start and each batch's LDS share) or an active one."""
     final = converge_final_step(None)
     n = int(final.rsplit("_", 1)[1].split(".")[0])
     ids, _ = converge_chain(n)
+    with open(final) as fh:
+        is_lds = json.load(fh)["is_lds"]
     start, batch = GROW.get("start", 32), GROW.get("batch", 16)
-    return [(cid, 0 if i < start else 1 + (i - start) // batch) for i, cid in enumerate(ids)]
+    return [(cid, 0 if i < start else 1 + (i - start) // batch, bool(is_lds[i])) for i, cid in enumerate(ids)]
 
 
 rule converge_table:
@@ -97,12 +100,13 @@ rule converge_table:
     surrogate and the maps trained on the converged sample read."""
     input:
         step=converge_final_step,
-        metrics=lambda wc: [f"results/cases/{cid}/metrics.json" for cid, _ in converge_final_cases()],
-        benchmarks=lambda wc: [f"results/cases/{cid}/benchmark.tsv" for cid, _ in converge_final_cases()],
+        metrics=lambda wc: [f"results/cases/{cid}/metrics.json" for cid, _, _ in converge_final_cases()],
+        benchmarks=lambda wc: [f"results/cases/{cid}/benchmark.tsv" for cid, _, _ in converge_final_cases()],
     output:
         table="results/converge/table.csv",
     params:
-        labels=lambda wc: [{"sweep": "converge", "index": i, "batch": b} for i, (_, b) in enumerate(converge_final_cases())],
+        labels=lambda wc: [{"sweep": "converge", "index": i, "batch": b, "lds": lds}
+                           for i, (_, b, lds) in enumerate(converge_final_cases())],
     log:
         "logs/converge/table.log",
     localrule: True

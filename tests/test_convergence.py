@@ -571,7 +571,7 @@ FAST = {"cv_rmse": {"folds": 3}, "map_change": {"box_k": 3}, "ci": {"resamples":
 @pytest.mark.slow
 def test_converge_stops_early_on_a_smooth_function():
     cfg = {**FAST, "start": 24, "batch": 12, "budget": 120,
-           "ci": {"resamples": 200, "halfwidth": {"std": 0.2, "skewness": None, "kurtosis": None}}}
+           "ci": {"resamples": 200, "halfwidth": {"std": 0.3, "skewness": None, "kurtosis": None}}}
     rec, path = _run_loop(_smooth, 0.005, cfg)
     assert rec["reason"] == "criteria met" and rec["n"] < 120
     first = rec["criteria"]["first_held"]
@@ -601,3 +601,25 @@ def test_converge_stops_on_the_cpu_budget_and_lds_batches_are_the_sequence():
     assert np.allclose(got, lds, atol=1e-3)  # rounded to the simulated precision
     with pytest.raises(ValueError, match="converge.sampling"):
         stepper.step_settings({"sampling": "grid"})
+
+
+@pytest.mark.slow
+def test_active_batches_keep_an_lds_share_and_statistics_use_it():
+    cfg = {**FAST, "start": 16, "batch": 8, "budget": 32, "lds_share": 0.5}
+    rec, path = _run_loop(_smooth, 0.01, cfg)
+    assert rec["reason"] == "case budget" and rec["n"] == 32
+    # each batch: 4 points continuing the LDS sequence, then 4 active ones
+    lds = halton(24, 42)[list(NAMES)].to_numpy()
+    for k, step in enumerate(path[:-1]):
+        got = pd.DataFrame(step["next_batch"])[list(NAMES)].to_numpy()
+        assert np.allclose(got[:4], lds[16 + 4 * k: 20 + 4 * k], atol=1e-3)
+        assert not any(np.allclose(g, l, atol=1e-3) for g in got[4:] for l in lds)
+    assert rec["is_lds"] == [True] * 16 + ([True] * 4 + [False] * 4) * 2
+    assert rec["n_lds"] == 24 and rec["study_rule_path"][-1]["n_lds"] == 24
+
+
+def test_settings_drop_a_statistic_and_apply_once():
+    s = mc.settings({"ci": {"halfwidth": {"kurtosis": None, "std": 0.2}}})
+    assert set(s["ci"]["halfwidth"]) == {"mean", "std", "median", "skewness"}
+    assert s["ci"]["halfwidth"]["std"] == 0.2
+    assert mc.settings(s) == s  # resolved settings pass through unchanged (kurtosis stays dropped)

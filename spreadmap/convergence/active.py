@@ -85,13 +85,14 @@ class _Posterior:
 def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = None,
                  n_candidates: int = 4096, acquisition: str = "ivr",
                  reference: np.ndarray | None = None, ranges: dict | None = None,
-                 max_reference: int = 1024) -> np.ndarray:
+                 max_reference: int = 1024, pending: np.ndarray | None = None) -> np.ndarray:
     """The next ``n`` design points (physical units, NAMES order) for the fitted ``models``.
 
     ``done``: the finished (or already scheduled) cases, physical units: used by the fallback's
     exclusion radius (the GP already knows its training cases).  ``reference``: where the map is
     read (``map_criteria.map_grids`` stacked), needed by ``ivr``; a seeded subset of at most
-    ``max_reference`` of them is used.
+    ``max_reference`` of them is used.  ``pending``: points already in this batch (physical
+    units, e.g. its LDS share), conditioned on before the picks (GP models only).
     """
     if acquisition not in ACQUISITIONS:
         raise ValueError(f"acquisition {acquisition!r}; allowed: {list(ACQUISITIONS)}")
@@ -108,8 +109,15 @@ def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = 
         if len(R) > max_reference:
             pick = np.random.default_rng([int(seed), 17]).choice(len(R), max_reference, replace=False)
             R = R[np.sort(pick)]
+    n_cand = len(C)
+    if pending is not None and len(pending):
+        C = np.vstack([C, to_unit(np.asarray(pending, float), ranges)])
     posts = [_Posterior(m, C, R) for m in models]
-    chosen: list[int] = []
+    for j in range(n_cand, len(C)):  # the pending points: update the posterior, never pick them
+        for p in posts:
+            p.add(j)
+    chosen: list[int] = list(range(n_cand, len(C)))
+    first = len(chosen)
     for _ in range(int(n)):
         score = sum(p.score(acquisition) for p in posts)
         score[chosen] = -np.inf
@@ -117,7 +125,7 @@ def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = 
         chosen.append(j)
         for p in posts:
             p.add(j)
-    return to_physical(C[chosen], ranges)
+    return to_physical(C[chosen[first:]], ranges)
 
 
 def _fallback(models, n, C, done, ranges) -> np.ndarray:

@@ -62,6 +62,8 @@ DEFAULTS: dict[str, Any] = {
 def settings(cfg: Mapping | None) -> dict[str, Any]:
     """The criteria's settings: DEFAULTS overridden by config ``converge:`` (unknown criteria refused)."""
     cfg = dict(cfg or {})
+    if cfg.get("_resolved"):  # already the output of settings(): apply nothing twice
+        return cfg
     out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in DEFAULTS.items()}
     out["ci"]["halfwidth"] = dict(DEFAULTS["ci"]["halfwidth"])
     for key in ("cv_rmse", "map_change", "ci"):
@@ -87,6 +89,7 @@ def settings(cfg: Mapping | None) -> dict[str, Any]:
     if out["map_change"]["statistic"] not in ("max", "rms"):
         raise ValueError(f"config key 'converge.map_change.statistic': {out['map_change']['statistic']!r}; "
                          "allowed: max, rms")
+    out["_resolved"] = True
     return out
 
 
@@ -217,12 +220,15 @@ def ci_widths(values, halfwidth: Mapping[str, float], level: float = 0.9, resamp
 def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("mfr", "pd"),
              prev_table: pd.DataFrame | None = None, grids: Mapping[str, np.ndarray] | None = None,
              cfg: Mapping | None = None, seed: int = 0,
-             floors: Mapping[str, float] | None = None) -> dict[str, Any]:
+             floors: Mapping[str, float] | None = None,
+             stats_table: pd.DataFrame | None = None) -> dict[str, Any]:
     """The three criteria on the cases of ``table`` (and the previous batch's ``prev_table``).
 
     Each criterion gets ``value`` (the worst target's ratio to its threshold: <= 1 holds),
     ``holds``, and per target the numbers behind it.  ``map_change`` is None without a
     previous table.  ``models`` holds the fitted models (not JSON; dropped by ``to_json``).
+    ``stats_table``: the cases whose statistics the CIs are about (default ``table``; with active
+    batches, the LDS cases only: the others are not a uniform sample of the design space).
     """
     s = settings(cfg)
     grids = grids if grids is not None else map_grids(box_k=int(s["map_change"]["box_k"]))
@@ -246,7 +252,8 @@ def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("m
             stat = s["map_change"]["statistic"]
             per["map_change"][t] = {**ch, "noise_sd": noise, "threshold": thr, "statistic": stat,
                                     "ratio": ch[stat] / thr}
-        cis = ci_widths(y, s["ci"]["halfwidth"], level=float(s["ci"]["level"]),
+        y_stats = y if stats_table is None else table_data(stats_table, t)[1]
+        cis = ci_widths(y_stats, s["ci"]["halfwidth"], level=float(s["ci"]["level"]),
                         resamples=int(s["ci"]["resamples"]), seed=seed, floors=floors)
         per["ci"][t] = {k: {kk: float(vv) for kk, vv in v.items()} for k, v in cis.items()}
         per["ci"][t]["ratio"] = float(max(v["ratio"] for v in cis.values()))

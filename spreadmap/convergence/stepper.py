@@ -9,8 +9,16 @@ on the cases in run order, same batches), and decides:
 * ``case budget``: ``converge.budget`` cases run;
 * ``CPU budget``: the cases' CPU time (their ``cpu_time``, else ``wall_time``) reached
   ``converge.cpu_budget_h``;
-* otherwise the next batch: ``converge.batch`` points (fewer if the budget is closer), chosen by
-  ``active.choose_batch`` (``sampling: active``) or the next LDS points (``sampling: lds``).
+* otherwise the next batch: ``converge.batch`` points (fewer if the budget is closer): with
+  ``sampling: active`` a share ``lds_share`` of them are the next points of the LDS sequence and
+  the rest are chosen by ``active.choose_batch`` (conditioned on that LDS share); with
+  ``sampling: lds`` all are the next LDS points.
+
+Why an LDS share: active cases are not a uniform sample of the design space, so statistics of
+the cases (the study's five statistics, their bootstrap CIs) would describe where the model was
+unsure, not the design space.  Those two are computed on the LDS cases only (the start and the
+LDS share of every batch, ``is_lds`` in the record), which stay a prefix of the LDS sequence;
+the map criteria (CV RMSE, map change) use every case.
 
 Everything the step needs is its arguments, so it is tested without Snakemake or YADE.
 """
@@ -32,7 +40,7 @@ from .study_rule import batches_until_converged
 
 STEP_DEFAULTS: dict[str, Any] = {
     "start": 32, "batch": 16, "budget": 512, "cpu_budget_h": None, "sampling": "active",
-    "acquisition": "ivr", "candidates": 4096, "seed": 7, "k_consecutive": 3,
+    "acquisition": "ivr", "candidates": 4096, "seed": 7, "k_consecutive": 3, "lds_share": 0.5,
 }
 
 
@@ -44,6 +52,8 @@ def step_settings(cfg: Mapping | None) -> dict[str, Any]:
     if out["acquisition"] not in active.ACQUISITIONS:
         raise ValueError(f"config key 'converge.acquisition': {out['acquisition']!r}; "
                          f"allowed: {list(active.ACQUISITIONS)}")
+    if not 0.0 <= float(out["lds_share"]) <= 1.0:
+        raise ValueError(f"config key 'converge.lds_share': {out['lds_share']!r}; allowed: 0 to 1")
     out["criteria"] = map_criteria.settings(cfg)
     return out
 
@@ -55,11 +65,16 @@ def cpu_hours(table: pd.DataFrame) -> float:
     return float(np.nansum(cpu.fillna(wall).to_numpy(float))) / 3600.0
 
 
+def _lds_per_batch(s: Mapping) -> int:
+    return int(s["batch"]) if s["sampling"] == "lds" else int(round(float(s["lds_share"]) * int(s["batch"])))
+
+
 def _study_rule(table: pd.DataFrame, targets: Sequence[str], s: Mapping, n: int,
                 tolerance: float, floors) -> dict[str, Any]:
+    """The study's rule on the LDS cases (``table``), checked after every batch's LDS share."""
     ok = usable(table)
     values = np.where(ok[:, None], table[list(targets)].to_numpy(float), np.nan)
-    res = batches_until_converged(lambda m: values[:m], batch_size=int(s["batch"]),
+    res = batches_until_converged(lambda m: values[:m], batch_size=max(_lds_per_batch(s), 1),
                                   k_consecutive=int(s["k_consecutive"]), budget=n,
                                   start=min(int(s["start"]), n), tolerance=tolerance, floors=floors,
                                   names=tuple(targets))
@@ -83,8 +98,12 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
     fit = fit or make_gp_fit(ranges)
     grids = map_criteria.map_grids(maps_cfg, ranges, box_k=int(crit["map_change"]["box_k"]))
     n_prev = None if prev_step is None else int(prev_step["n"])
+    is_lds = [True] * n if prev_step is None else list(prev_step["is_lds"])
+    if len(is_lds) != n:
+        raise ValueError(f"the previous step lists {len(is_lds)} cases, the table has {n}")
+    lds_table = table[np.asarray(is_lds, bool)]
     result = map_criteria.evaluate(table, fit, targets, None if n_prev is None else table.iloc[:n_prev],
-                                   grids, crit, seed=0, floors=floors)
+                                   grids, crit, seed=0, floors=floors, stats_table=lds_table)
     tracker = map_criteria.Tracker(crit["stop_on"], crit["hold_for"],
                                    None if prev_step is None else prev_step["criteria"]["path"])
     tracker.add(n, result)
@@ -100,27 +119,31 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
         "n": int(n), "usable": int(usable(table).sum()), "cpu_hours": cpu_h,
         "stop": reason is not None, "reason": reason or "criteria not met yet",
         "criteria": {**tracker.summary(), "at_this_batch": map_criteria.to_json(result)},
-        "study_rule": _study_rule(table, targets, s, n, tolerance, floors),
+        "study_rule": _study_rule(lds_table, targets, s, len(lds_table), tolerance, floors),
         "study_rule_path": list((prev_step or {}).get("study_rule_path", [])),
-        "next_n": None, "next_batch": [],
+        "next_n": None, "next_batch": [], "is_lds": is_lds, "n_lds": int(sum(is_lds)),
         "settings": {k: v for k, v in s.items() if k != "criteria"},
         "study_rule_tolerance": float(tolerance),
     }
-    record["study_rule_path"].append({"n": int(n), "max_change": record["study_rule"]["max_change_now"],
+    record["study_rule_path"].append({"n": int(n), "n_lds": int(len(lds_table)),
+                                      "max_change": record["study_rule"]["max_change_now"],
                                       "streak": record["study_rule"]["streak_now"]})
     if reason is None:
         size = min(int(s["batch"]), int(s["budget"]) - n)
-        if s["sampling"] == "lds":
-            pts = halton(n + size, lds_seed, ranges)[list(NAMES)].to_numpy()[n:]
-        else:
+        k_lds = size if s["sampling"] == "lds" else min(_lds_per_batch(s), size)
+        n_lds = int(sum(is_lds))  # LDS points used so far: the next ones continue the sequence
+        pts = halton(n_lds + k_lds, lds_seed, ranges)[list(NAMES)].to_numpy()[n_lds:]
+        if k_lds < size:
             reference = np.vstack(list(grids.values()))
             models = [result["models"][t] for t in targets]
-            pts = active.choose_batch(models, size, seed=int(s["seed"]) * 1_000_003 + n,
-                                      done=table[list(NAMES)].to_numpy(float),
-                                      n_candidates=int(s["candidates"]),
-                                      acquisition=s["acquisition"], reference=reference, ranges=ranges)
+            more = active.choose_batch(models, size - k_lds, seed=int(s["seed"]) * 1_000_003 + n,
+                                       done=table[list(NAMES)].to_numpy(float),
+                                       n_candidates=int(s["candidates"]), acquisition=s["acquisition"],
+                                       reference=reference, ranges=ranges, pending=pts)
+            pts = np.vstack([pts, more])
         record["next_n"] = n + size
         record["next_batch"] = [rounded(dict(zip(NAMES, map(float, p)))) for p in pts]
+        record["is_lds"] = is_lds + [True] * k_lds + [False] * (size - k_lds)
     record["summary"] = describe(record)
     return record
 
