@@ -160,7 +160,7 @@ def describe(record: Mapping[str, Any]) -> str:
         if now is None:
             lines.append(f"  {name} ({req}): not evaluated yet (needs a previous batch)")
             continue
-        state = "holds" if now["holds"] else f"{now['value']:.2f} x its threshold"
+        state = "holds" if now["holds"] else f"{now['value']:.3f} x its threshold"
         held = f"first held at {first} cases" if first is not None else "never held yet"
         lines.append(f"  {name} ({req}): {state}; {held}")
     sr = record["study_rule"]
