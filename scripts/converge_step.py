@@ -1,13 +1,12 @@
-"""Snakemake entry (checkpoint): with the first n LDS cases finished, has the sweep converged
-(criterion held for k consecutive batches), is the budget spent, or is another batch needed?"""
+"""Snakemake entry (checkpoint): after n cases of `snakemake converge`, stop (map criteria met, or
+the case / CPU budget spent) or choose the next batch. The logic is spreadmap.convergence.stepper."""
 import json
 
-import numpy as np
 import pandas as pd
 
-from spreadmap.convergence import batches_until_converged
-from spreadmap.design import TARGETS
-from spreadmap.table import usable
+from spreadmap.convergence.model import make_gp_fit
+from spreadmap.convergence.stepper import step
+from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 
 log_to(snakemake)  # noqa: F821
@@ -19,24 +18,13 @@ rows = []
 for path in sm.input.metrics:
     with open(path) as fh:
         rows.append(json.load(fh))
-table = pd.DataFrame(rows)
-ok = usable(table)
-# failed/flagged cases stay in prefix order, as NaN
-values = np.where(ok[:, None], table[list(TARGETS)].to_numpy(float), np.nan)
-
-
-def first(m):
-    return values[:m]
-
-
-result = batches_until_converged(first, batch_size=p.batch, k_consecutive=p.k_consecutive, budget=n,
-                                 start=p.start, tolerance=p.tolerance, floors=p.floors, names=TARGETS)
-converged = result["reason"] == "converged"
-step = {"n": n, "usable": int(ok.sum()), "stop": converged or n >= p.budget,
-        "reason": "converged" if converged else ("budget" if n >= p.budget else "not yet converged"),
-        "converged_at": result["stopped_at"] if converged else None,
-        "next_n": None if (converged or n >= p.budget) else min(n + p.batch, p.budget),
-        "history": result.get("history")}
-with open(sm.output.step, "w") as fh:
-    json.dump(step, fh, indent=1, default=str)
-print(f"converge: {n} cases, {step['reason']}" + (f", next {step['next_n']}" if step["next_n"] else ""))
+table = pd.DataFrame(rows)  # run order: the previous step's cases first
+previous = None
+if "previous" in sm.input.keys():
+    with open(sm.input.previous) as fh:
+        previous = json.load(fh)
+# the map model: a GP behind spreadmap.convergence.model's interface (the surrogate's fit can replace it)
+record = step(table, n, p.converge, previous, fit=make_gp_fit(p.ranges, n_restarts=1), ranges=p.ranges, maps_cfg=p.maps,
+              lds_seed=p.lds_seed, tolerance=p.tolerance, floors=p.floors)
+write_text_atomically(sm.output.step, json.dumps(record, indent=1, default=str))
+print(record["summary"])

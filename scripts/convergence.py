@@ -5,7 +5,7 @@ from pathlib import Path
 import pandas as pd
 
 from spreadmap import convergence as cv
-from spreadmap import convergence_plots as plots
+from spreadmap.convergence import plots
 from spreadmap.design import TARGETS
 from spreadmap.table import usable
 from spreadmap.logs import log_to

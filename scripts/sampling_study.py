@@ -1,6 +1,6 @@
 """Snakemake entry: the DEM-free sampling-design study (LDS vs lattice vs random)."""
-from spreadmap import sampling_study
-from spreadmap.convergence_plots import plot_sampling_study
+from spreadmap.convergence import sampling_study
+from spreadmap.convergence.plots import plot_sampling_study
 from spreadmap.surrogate import load_model
 from spreadmap.logs import log_to
 

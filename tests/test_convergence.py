@@ -42,10 +42,20 @@ def test_partition_statistics_equal_numpy_and_scipy():
     assert one["mean"] == 0.4 and np.isnan(one["std"]) and np.isnan(one["skewness"])
 
 
-def test_relative_changes_floor_rule():
+def _changes(prev, curr, floors=None):
+    """The rule as convergence_table applies it, one statistic at a time."""
+    fl = cv.study_rule._floors(floors)
+    out = {}
+    for s in cv.STATISTICS:
+        c, d, b = cv.study_rule._change_arrays(prev[s], curr[s], fl[s])
+        out[s] = {"change": float(c), "denominator": float(d), "basis": str(b)}
+    return out
+
+
+def test_change_rule_floor():
     prev = {"mean": 0.5, "std": 0.1, "median": 0.5, "kurtosis": -0.02, "skewness": 0.010}
     curr = {"mean": 0.501, "std": 0.1, "median": 0.49, "kurtosis": -0.024, "skewness": 0.013}
-    ch = cv.relative_changes(prev, curr)
+    ch = _changes(prev, curr)
     assert ch["mean"]["change"] == pytest.approx(0.002)
     assert ch["mean"]["basis"] == "previous" and ch["mean"]["denominator"] == 0.5
     assert ch["median"]["change"] == pytest.approx(0.02)
@@ -55,18 +65,15 @@ def test_relative_changes_floor_rule():
     assert ch["skewness"]["change"] == pytest.approx(0.003)
     assert ch["kurtosis"]["change"] == pytest.approx(0.004)
     # the naive rule would call the same skewness step a 30 % change
-    naive = cv.relative_changes(prev, curr, {"skewness": 0.0, "kurtosis": 0.0})
+    naive = _changes(prev, curr, {"skewness": 0.0, "kurtosis": 0.0})
     assert naive["skewness"]["change"] == pytest.approx(0.3)
     assert naive["skewness"]["basis"] == "previous"
-    # far from zero the rule is the ordinary relative one
-    big = cv.relative_changes({**prev, "skewness": 2.0}, {**curr, "skewness": 2.02})
-    assert big["skewness"]["basis"] == "previous"
-    assert big["skewness"]["change"] == pytest.approx(0.01)
-    # a NaN statistic gives a NaN change
-    nan = cv.relative_changes({**prev, "std": np.nan}, curr)
+    big = _changes({**prev, "skewness": 2.0}, {**curr, "skewness": 2.02})
+    assert big["skewness"]["basis"] == "previous" and big["skewness"]["change"] == pytest.approx(0.01)
+    nan = _changes({**prev, "std": np.nan}, curr)
     assert np.isnan(nan["std"]["change"])
     with pytest.raises(ValueError):
-        cv.relative_changes(prev, curr, {"variance": 1.0})
+        _changes(prev, curr, {"variance": 1.0})
 
 
 # ---------------------------------------------------------------------------------------------
@@ -225,7 +232,7 @@ def test_first_stable_n_agrees_with_brute_force_on_real_data():
     per_n = {n: cv.partition_statistics(y[:n]) for n in range(10, n_run + 1)}
 
     def holds(n):
-        ch = cv.relative_changes(per_n[n - 1], per_n[n])
+        ch = _changes(per_n[n - 1], per_n[n])
         return all(v["change"] < TOL for v in ch.values())
 
     assert not holds(n0 - 1)
@@ -302,7 +309,7 @@ def _sweeps():
 
 
 def test_plots_write_png_pdf_csv(tmp_path):
-    from spreadmap import convergence_plots as cp
+    from spreadmap.convergence import plots as cp
     lds, lat = _sweeps()
     long_df = pd.concat([cp.partition_values(lds, "lds", partitions=[50, 100, 200, 400]),
                          cp.partition_values(lat, "lattice", partition_col="k")],
@@ -325,3 +332,294 @@ def test_plots_write_png_pdf_csv(tmp_path):
                       & (stats_csv["statistic"] == "mean")]
     assert final["band_high"].iloc[0] - final["band_low"].iloc[0] == pytest.approx(
         2 * TOL * conv["lds"]["mfr_mean"].iloc[-1])
+
+
+# ---------------------------------------------------------------------------------------------
+# the map model interface (a GP) and the map-level criteria, on functions with known truth
+# ---------------------------------------------------------------------------------------------
+from spreadmap.convergence import active, map_criteria as mc, model as mm, stepper  # noqa: E402
+from spreadmap.design import NAMES, to_physical, to_unit  # noqa: E402
+from spreadmap.sampling import halton, halton_unit  # noqa: E402
+
+
+def _smooth(u):
+    """A smooth MFR-like truth: 0.3 + 0.06 u_f - 0.04 u_d + 0.02 u_h u_v (range ~0.24-0.38)."""
+    u = np.asarray(u, float)
+    return 0.3 + 0.06 * u[:, 0] - 0.04 * u[:, 1] + 0.02 * u[:, 2] * u[:, 3]
+
+
+def _noisy_table(u, sd, seed, truth=_smooth):
+    y = truth(u) + sd * np.random.default_rng(seed).standard_normal(len(u))
+    t = pd.DataFrame(to_physical(u), columns=list(NAMES))
+    t["mfr"] = y
+    t["pd"] = 0.9 * y + 0.02
+    return t
+
+
+def test_gp_interface_sd_is_the_maps_not_the_noise():
+    u = halton_unit(120, 1)
+    sd = 0.01
+    t = _noisy_table(u, sd, 0)
+    model = mm.make_gp_fit()(t[list(NAMES)].to_numpy(), t["mfr"].to_numpy())
+    mean, post = model.predict(t[list(NAMES)].to_numpy(), return_std=True)
+    assert mean.shape == post.shape == (120,)
+    # the fitted noise is the known noise (within sampling error of an SD from ~120 residuals)
+    assert 0.75 * sd < model.noise_sd < 1.3 * sd
+    # the map's SD at the cases is well below one case's noise (the GP averages neighbours)
+    assert np.all(post < 0.8 * sd)
+    # sklearn's predictive SD includes the noise: ours is that minus the white variance
+    _, full = model.gp.predict(to_unit(t[list(NAMES)].to_numpy()), return_std=True)
+    white = model.white_var * model._y_scale**2
+    assert np.allclose(post**2, np.maximum(full**2 - white, 0), rtol=1e-8, atol=1e-14)
+    # the posterior variance used by active batches equals the interface's SD (standardised)
+    assert np.allclose(model.posterior_var(to_unit(t[list(NAMES)].to_numpy()[:10])),
+                       (post[:10] / model._y_scale) ** 2, rtol=1e-6, atol=1e-12)
+    # and the map error is far below the noise
+    g = np.random.default_rng(9).random((500, 4))
+    assert np.sqrt(np.mean((model.predict(to_physical(g)) - _smooth(g)) ** 2)) < 0.5 * sd
+
+
+def test_cv_rmse_against_known_noise():
+    u = halton_unit(64, 2)
+    sd = 0.01
+    t = _noisy_table(u, sd, 1)
+    res = mc.cv_rmse(t[list(NAMES)].to_numpy(), t["mfr"].to_numpy(), None, mm.make_gp_fit(), folds=4)
+    # held-out error against noisy cases: the noise plus a small map error
+    assert sd * 0.8 < res["rmse"] < sd * 1.3
+    assert np.isnan(res["heldout_noise_sd"])
+    given = mc.cv_rmse(t[list(NAMES)].to_numpy(), t["mfr"].to_numpy(), np.full(64, sd), mm.make_gp_fit(), folds=2)
+    assert given["heldout_noise_sd"] == pytest.approx(sd)
+
+
+def test_map_change_is_the_shift_of_the_data():
+    u = halton_unit(40, 3)
+    t = _noisy_table(u, 0.01, 2)
+    fit = mm.make_gp_fit()
+    X, y = t[list(NAMES)].to_numpy(), t["mfr"].to_numpy()
+    a, b = fit(X, y), fit(X, y + 0.003)  # normalize_y: the same fit, shifted by 0.003
+    grids = mc.map_grids(box_k=3)
+    ch = mc.map_change(a, b, grids)
+    assert ch["max"] == pytest.approx(0.003, rel=1e-6) and ch["rms"] == pytest.approx(0.003, rel=1e-6)
+    assert mc.map_change(a, a, grids)["max"] == 0.0
+
+
+def test_map_grids_follow_config():
+    g = mc.map_grids({"machine": {"f": 0.2, "d_um": 20, "n_h": 3, "n_v": 4}, "powder": {"h_um": 60, "v_mm_s": 8}},
+                     box_k=3, n_d=7, n_f=2)
+    assert g["box"].shape == (81, 4) and g["machine"].shape == (12, 4) and g["powder"].shape == (14, 4)
+    assert np.all(g["machine"][:, 0] == 0.2) and np.all(g["machine"][:, 1] == 20)
+    assert np.all(g["powder"][:, 2] == 60) and np.all(g["powder"][:, 3] == 8)
+    assert set(np.round(g["machine"][:, 2], 6)) == {55.0, 65.0, 75.0}
+    # box cell centres: no point on a face
+    assert np.all((g["box"][:, 0] > 0.15) & (g["box"][:, 0] < 0.45))
+
+
+def test_bootstrap_ci_coverage_on_a_known_distribution():
+    """90 % percentile intervals of the mean and SD of N(0.3, 0.05) samples cover the true values
+    in about 90 % of 200 samples (binomial 99 % range for 200 draws at p = 0.9: 0.845-0.95;
+    percentile intervals run slightly short at n = 100, so the lower bound is 0.82)."""
+    rng = np.random.default_rng(11)
+    hits = {"mean": 0, "std": 0}
+    widths = []
+    for rep in range(200):
+        x = rng.normal(0.3, 0.05, 100)
+        ci = mc.bootstrap_ci(x, level=0.9, resamples=500, seed=rep, statistics=("mean", "std"))
+        hits["mean"] += ci["mean"]["low"] <= 0.3 <= ci["mean"]["high"]
+        hits["std"] += ci["std"]["low"] <= 0.05 <= ci["std"]["high"]
+        widths.append(ci["mean"]["halfwidth"])
+    assert 0.82 <= hits["mean"] / 200 <= 0.95
+    assert 0.80 <= hits["std"] / 200 <= 0.95
+    # half-width of the mean: z_0.95 sigma / sqrt(n) = 1.645 x 0.005 (independent number)
+    assert np.mean(widths) == pytest.approx(1.645 * 0.005, rel=0.1)
+
+
+def test_ci_widths_relative_to_value_and_floor():
+    x = np.random.default_rng(2).normal(0.3, 0.03, 400)
+    res = mc.ci_widths(x, {"mean": 0.01, "skewness": 0.3}, resamples=300)
+    assert res["mean"]["relative_halfwidth"] == pytest.approx(res["mean"]["halfwidth"] / abs(res["mean"]["value"]))
+    # skewness near 0: the floor 1 is the denominator, so the width is absolute
+    assert res["skewness"]["relative_halfwidth"] == pytest.approx(res["skewness"]["halfwidth"])
+    assert res["mean"]["ratio"] < 1  # 1.645 x 0.03 / 20 / 0.3 = 0.008 < 0.01
+    assert res["skewness"]["ratio"] < 1  # 1.645 sqrt(6/400) = 0.2 < 0.3
+
+
+def test_criteria_hold_with_many_cases_and_not_with_few():
+    cfg = {"cv_rmse": {"folds": 3},
+           "ci": {"resamples": 300, "halfwidth": {"std": 0.15, "kurtosis": None, "skewness": None}}}
+    few = mc.evaluate(_noisy_table(halton_unit(12, 4), 0.01, 3), mm.make_gp_fit(), ("mfr",), cfg=cfg,
+                      grids=mc.map_grids(box_k=3))
+    many_t = _noisy_table(halton_unit(96, 4), 0.01, 3)
+    many = mc.evaluate(many_t, mm.make_gp_fit(), ("mfr",), prev_table=many_t.iloc[:80], cfg=cfg,
+                       grids=mc.map_grids(box_k=3))
+    assert few["map_change"] is None  # nothing to compare with
+    assert not few["ci"]["holds"]  # SD of 12 values: half-width ~ 1.645 / sqrt(24) = 0.34 > 0.15
+    assert many["cv_rmse"]["holds"] and many["map_change"]["holds"] and many["ci"]["holds"]
+    assert set(many["ci"]["targets"]["mfr"]) == {"mean", "std", "median", "ratio"}
+    with pytest.raises(ValueError, match="converge.stop_on"):
+        mc.settings({"stop_on": ["cv_rmse", "r2"]})
+
+
+def test_tracker_first_held_and_stop():
+    tr = mc.Tracker(["cv_rmse", "ci"], hold_for=2)
+    r = lambda a, b: {"cv_rmse": {"value": a, "holds": a <= 1}, "map_change": None, "ci": {"value": b, "holds": b <= 1}}
+    tr.add(32, r(1.5, 2.0))
+    tr.add(48, r(0.9, 1.2))
+    assert not tr.stop()
+    tr.add(64, r(0.95, 0.8))
+    assert not tr.stop()  # all hold once: hold_for is 2
+    tr.add(80, r(0.9, 0.7))
+    assert tr.stop()
+    assert tr.first_held() == {"cv_rmse": 48, "map_change": None, "ci": 64}
+
+
+# ---------------------------------------------------------------------------------------------
+# active batches
+# ---------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def fitted_pair():
+    t = _noisy_table(halton_unit(48, 5), 0.01, 4)
+    fit = mm.make_gp_fit()
+    X = t[list(NAMES)].to_numpy()
+    return [fit(X, t["mfr"].to_numpy()), fit(X, t["pd"].to_numpy())], X
+
+
+def test_batch_is_reproducible_and_seeded(fitted_pair):
+    models, X = fitted_pair
+    ref = np.vstack(list(mc.map_grids(box_k=3).values()))
+    a = active.choose_batch(models, 8, seed=1, n_candidates=512, reference=ref)
+    b = active.choose_batch(models, 8, seed=1, n_candidates=512, reference=ref)
+    c = active.choose_batch(models, 8, seed=2, n_candidates=512, reference=ref)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)
+    lo, hi = np.array([0.15, 10, 55, 5]), np.array([0.45, 50, 75, 15])
+    assert np.all((a >= lo) & (a <= hi))
+    assert len(np.unique(a, axis=0)) == 8
+
+
+def test_posterior_updates_are_exact_and_keep_a_batch_from_clustering(fitted_pair):
+    """The rank-one updates equal a GP refitted (same kernel) with the batch added; the greedy
+    batch is more spread out than the top 8 of the same score without updates."""
+    from scipy.spatial.distance import pdist
+    from sklearn.gaussian_process import GaussianProcessRegressor
+    models, X = fitted_pair
+    m = models[0]
+    C = active.candidates(512, 3)
+    post = active._Posterior(m, C, None)
+    picks = [5, 100, 300]
+    for j in picks:
+        post.add(j)
+    # independent: sklearn GP on the training cases plus the picks (values do not matter for the
+    # variance), the latent kernel fixed, the noise on the diagonal
+    Xa = np.vstack([m.X_train_unit, C[picks]])
+    alpha = np.concatenate([m.train_noise_var(), np.full(3, m.new_case_noise_var())])
+    ref = GaussianProcessRegressor(kernel=m.latent_kernel, alpha=alpha, optimizer=None).fit(Xa, np.zeros(len(Xa)))
+    _, sd = ref.predict(C, return_std=True)
+    assert np.allclose(post.var, sd**2, rtol=1e-6, atol=1e-9)
+
+    batch = to_unit(active.choose_batch(models, 8, seed=3, n_candidates=1024, acquisition="max_sd"))
+    C = active.candidates(1024, 3)
+    score = sum(mm.posterior_var(C) / mm.new_case_noise_var() for mm in models)
+    top = C[np.argsort(-score)[:8]]
+    assert pdist(batch).min() > 1.5 * pdist(top).min()
+    assert np.allclose(batch[0], C[np.argmax(score)])  # the first pick: the largest variance
+
+
+def test_fallback_for_models_without_covariance(fitted_pair):
+    models, X = fitted_pair
+
+    class Plain:  # the bare interface: predict(X, return_std=True) and noise_sd
+        def __init__(self, m):
+            self.m, self.noise_sd = m, m.noise_sd
+
+        def predict(self, X, return_std=False):
+            return self.m.predict(X, return_std=return_std)
+
+    b = active.choose_batch([Plain(m) for m in models], 6, seed=1, done=X, n_candidates=512)
+    assert b.shape == (6, 4) and len(np.unique(b, axis=0)) == 6
+
+
+# ---------------------------------------------------------------------------------------------
+# the converge step, run as a loop on fake tables (no Snakemake, no YADE)
+# ---------------------------------------------------------------------------------------------
+def _run_loop(truth, sd, cfg, seed=0, cpu_per_case=None):
+    rng = np.random.default_rng(seed)
+
+    def observe(pts):
+        y = truth(to_unit(pts)) + sd * rng.standard_normal(len(pts))
+        out = pd.DataFrame(pts, columns=list(NAMES))
+        out["mfr"], out["pd"] = y, 0.9 * y + 0.02
+        out["status"], out["flagged"] = "ok", False
+        if cpu_per_case is not None:
+            out["cpu_time"] = cpu_per_case
+        return out
+
+    tab = observe(halton(cfg["start"], 42)[list(NAMES)].to_numpy())
+    prev, path = None, []
+    while True:
+        rec = stepper.step(tab, len(tab), cfg, prev, maps_cfg={"machine": {"n_h": 3, "n_v": 3}})
+        json.dumps(rec, default=str)
+        path.append(rec)
+        if rec["stop"]:
+            return rec, path
+        tab = pd.concat([tab, observe(pd.DataFrame(rec["next_batch"])[list(NAMES)].to_numpy())], ignore_index=True)
+        prev = rec
+
+
+FAST = {"cv_rmse": {"folds": 3}, "map_change": {"box_k": 3}, "ci": {"resamples": 200}, "candidates": 256}
+
+
+@pytest.mark.slow
+def test_converge_stops_early_on_a_smooth_function():
+    cfg = {**FAST, "start": 24, "batch": 12, "budget": 120,
+           "ci": {"resamples": 200, "halfwidth": {"std": 0.3, "skewness": None, "kurtosis": None}}}
+    rec, path = _run_loop(_smooth, 0.005, cfg)
+    assert rec["reason"] == "criteria met" and rec["n"] < 120
+    first = rec["criteria"]["first_held"]
+    assert all(first[c] is not None and first[c] <= rec["n"] for c in ("cv_rmse", "map_change", "ci"))
+    assert [r["n"] for r in path] == list(range(24, rec["n"] + 1, 12))
+    assert "criteria met" in rec["summary"] and "study's rule" in rec["summary"]
+    # the step's own record of the study's rule: one entry per batch
+    assert [h["n"] for h in rec["study_rule_path"]] == [r["n"] for r in path]
+
+
+@pytest.mark.slow
+def test_converge_stops_on_the_case_budget():
+    rough = lambda u: 0.3 + 0.1 * np.sin(12 * u[:, 0]) * np.cos(9 * u[:, 1])  # noqa: E731
+    cfg = {**FAST, "start": 16, "batch": 16, "budget": 40}
+    rec, path = _run_loop(rough, 0.02, cfg)
+    assert rec["reason"] == "case budget" and rec["n"] == 40
+    assert [r["n"] for r in path] == [16, 32, 40]  # the last batch is cut to the budget
+    assert len(path[1]["next_batch"]) == 8
+
+
+def test_converge_stops_on_the_cpu_budget_and_lds_batches_are_the_sequence():
+    cfg = {**FAST, "start": 16, "batch": 16, "budget": 400, "cpu_budget_h": 0.01, "sampling": "lds"}
+    rec, path = _run_loop(_smooth, 0.02, cfg, cpu_per_case=1.2)  # 30 cases x 1.2 s = 0.01 h
+    assert rec["reason"] == "CPU budget" and rec["n"] == 32 and rec["cpu_hours"] == pytest.approx(32 * 1.2 / 3600)
+    lds = halton(32, 42)[list(NAMES)].to_numpy()[16:]
+    got = pd.DataFrame(path[0]["next_batch"])[list(NAMES)].to_numpy()
+    assert np.allclose(got, lds, atol=1e-3)  # rounded to the simulated precision
+    with pytest.raises(ValueError, match="converge.sampling"):
+        stepper.step_settings({"sampling": "grid"})
+
+
+@pytest.mark.slow
+def test_active_batches_keep_an_lds_share_and_statistics_use_it():
+    cfg = {**FAST, "start": 16, "batch": 8, "budget": 32, "lds_share": 0.5}
+    rec, path = _run_loop(_smooth, 0.01, cfg)
+    assert rec["reason"] == "case budget" and rec["n"] == 32
+    # each batch: 4 points continuing the LDS sequence, then 4 active ones
+    lds = halton(24, 42)[list(NAMES)].to_numpy()
+    for k, step in enumerate(path[:-1]):
+        got = pd.DataFrame(step["next_batch"])[list(NAMES)].to_numpy()
+        assert np.allclose(got[:4], lds[16 + 4 * k: 20 + 4 * k], atol=1e-3)
+        assert not any(np.allclose(g, l, atol=1e-3) for g in got[4:] for l in lds)
+    assert rec["is_lds"] == [True] * 16 + ([True] * 4 + [False] * 4) * 2
+    assert rec["n_lds"] == 24 and rec["study_rule_path"][-1]["n_lds"] == 24
+
+
+def test_settings_drop_a_statistic_and_apply_once():
+    s = mc.settings({"ci": {"halfwidth": {"kurtosis": None, "std": 0.2}}})
+    assert set(s["ci"]["halfwidth"]) == {"mean", "std", "median", "skewness"}
+    assert s["ci"]["halfwidth"]["std"] == 0.2
+    assert mc.settings(s) == s  # resolved settings pass through unchanged (kurtosis stays dropped)

@@ -1,12 +1,12 @@
-"""Tests of spreadmap.sampling_study (no DEM) and of its figure."""
+"""Tests of spreadmap.convergence.sampling_study (no DEM) and of its figure."""
 import json
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from spreadmap import convergence_plots as cp
-from spreadmap import sampling_study as ss
+from spreadmap.convergence import plots as cp
+from spreadmap.convergence import sampling_study as ss
 from spreadmap.design import bounds
 
 
@@ -104,7 +104,6 @@ def test_summary_medians_censoring_and_ratios():
     assert rat["lattice_over_lds"] == pytest.approx(10.0) and rat["lattice_over_lds_kind"] == "ratio"
     assert rat["random_over_lds"] == pytest.approx(10.0)
     assert rat["random_over_lds_kind"] == "lower bound"
-    json.dumps(ss.StudyResult(tab, summ.reset_index(), ss.ratios(summ.reset_index())).to_dict())
 
 
 def test_sampling_study_plot_writes_files(small_study, tmp_path):
@@ -114,3 +113,54 @@ def test_sampling_study_plot_writes_files(small_study, tmp_path):
     data = pd.read_csv(paths["csv"])
     assert {"function", "method", "n_converged", "median", "iqr"} <= set(data.columns)
     assert len(data) == len(small_study.table)
+
+
+# ---------------------------------------------------------------------------------------------
+# the study with noise (map RMSE against the known truth)
+# ---------------------------------------------------------------------------------------------
+from spreadmap.convergence import noisy_study as ns  # noqa: E402
+from spreadmap.sampling import halton_unit  # noqa: E402
+
+
+def test_mfr_like_has_the_main_jobs_moments():
+    y = ns.mfr_like(np.random.default_rng(0).random((200_000, 4)))  # independent of the Halton moments
+    assert y.mean() == pytest.approx(0.29, abs=0.001)
+    assert y.std() == pytest.approx(0.085, rel=0.01)
+
+
+def test_noise_models_have_the_stated_spread():
+    u = halton_unit(4096, 1)
+    y = ns.mfr_like(u)
+    for name, r in (("mult3", 0.03), ("mult7", 0.07)):
+        obs, sd = ns.observe(u, name, np.random.default_rng(2))
+        assert sd is None
+        assert np.std(obs / y - 1) == pytest.approx(r, rel=0.05)
+    obs, sd = ns.observe(u, "counting", np.random.default_rng(3))
+    true_sd = ns.counting_sd(y, u)
+    assert np.std((obs - y) / true_sd) == pytest.approx(1.0, rel=0.05)
+    # 0.45/sqrt(N) with N = 76 y h/d: at y = 0.29, h/d = 2.5 the relative SD is 0.45/sqrt(55) = 6 %
+    phys = np.array([[0.3, 26.0, 65.0, 10.0]])
+    unit = (phys - [0.15, 10, 55, 5]) / [0.3, 40, 20, 10]
+    assert ns.counting_sd(np.array([0.29]), unit)[0] / 0.29 == pytest.approx(0.45 / np.sqrt(76 * 0.29 * 2.5), rel=1e-9)
+    with pytest.raises(ValueError):
+        ns.observe(u, "mult5", np.random.default_rng(0))
+
+
+def test_small_noisy_study_runs_and_counts_cases():
+    tab = ns.run(methods=("lds", "lattice", "active"), noises=("mult7",), seeds=[0], n_max=64, batch=16,
+                 n_candidates=256)
+    assert set(tab["method"]) == {"lds", "lattice", "active"}
+    assert np.all(np.isfinite(tab["map_rmse"])) and np.all(tab["map_rmse"] > 0)
+    assert sorted(tab.loc[tab["method"] == "active", "n"]) == [32, 48, 64]
+    assert sorted(tab.loc[tab["method"] == "lattice", "n"]) == [16]
+    # the GP's map error with 64 LDS cases is well below the 7 % noise (0.02) and the SD (0.085)
+    assert tab.loc[(tab["method"] == "lds") & (tab["n"] == 64), "map_rmse"].iloc[0] < 0.015
+
+
+def test_cases_needed_and_censoring():
+    tab = pd.DataFrame({"method": "lds", "noise": "mult3", "seed": [0, 0, 0, 1, 1, 1],
+                        "n": [32, 48, 64] * 2, "map_rmse": [0.02, 0.009, 0.004, 0.02, 0.015, 0.011]})
+    need = ns.cases_needed(tab, 0.01)
+    assert list(need["n_needed"].fillna(-1)) == [48, -1]
+    s = ns.summarise(need).iloc[0]
+    assert s["not_reached"] == 1 and s["min"] == 48 and np.isnan(s["max"]) and s["budget"] == 64

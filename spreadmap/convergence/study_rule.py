@@ -1,4 +1,7 @@
-"""Has a sweep converged?  Partition statistics of MFR and PD and the relative-change criterion.
+"""The study's rule: partition statistics of MFR and PD and the relative-change criterion.
+
+Kept exactly as the reference study ran it (it is the study's row of every convergence report);
+the workflow's own stopping rule is about the map (``spreadmap.convergence.map_criteria``).
 
 The criterion (SPEC, "Sampling and convergence")
 ------------------------------------------------
@@ -37,9 +40,8 @@ with the floors of ``DEFAULT_FLOORS``:
   and PD are positive fractions of order 0.1-0.7, so their mean, median and spread are only near
   zero when a whole partition jams (MFR all 0); then 0/TINY = 0 reads as "no change".
 
-``relative_changes`` returns, for every statistic, the change *and* the denominator used and
-whether that denominator was ``|prev|`` or the floor, so every decision can be audited; the
-tables of ``convergence_table`` carry the same columns.  A statistic that is NaN (fewer than two
+The tables of ``convergence_table`` carry, for every statistic, the change *and* the denominator
+used and whether that denominator was ``|prev|`` or the floor, so every decision can be audited.  A statistic that is NaN (fewer than two
 usable values, zero spread) gives a NaN change, and a NaN change never satisfies the criterion.
 
 Floors are configurable (``floors={"skewness": 0.5, ...}``); passing 0 (or ``TINY``) for
@@ -67,7 +69,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from .table import usable as usable_rows
+from ..table import usable as usable_rows
 from scipy import stats as _st
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")
@@ -132,22 +134,6 @@ def _change_arrays(prev, curr, floor: float):
     basis = np.where(~np.isfinite(prev), "undefined",
                      np.where(np.abs(prev) >= floor, "previous", "floor"))
     return change, denom, basis
-
-
-def relative_changes(prev: Mapping[str, float], curr: Mapping[str, float],
-                     scale: Mapping[str, float] | None = None) -> dict[str, dict[str, Any]]:
-    """Relative change of each statistic from ``prev`` to ``curr`` (see the module docstring).
-
-    ``scale`` overrides the floors of ``DEFAULT_FLOORS``.  Returns, per statistic,
-    ``{"change": float, "denominator": float, "basis": "previous" | "floor"}`` where ``basis``
-    says whether ``|prev|`` or the floor was the denominator.
-    """
-    fl = _floors(scale)
-    out = {}
-    for s in STATISTICS:
-        change, denom, basis = _change_arrays(prev[s], curr[s], fl[s])
-        out[s] = {"change": float(change), "denominator": float(denom), "basis": str(basis)}
-    return out
 
 
 def _stat_row(frames: Mapping[str, np.ndarray], prev_row: dict | None, fl: dict,

@@ -60,17 +60,16 @@ Checked case by case, LDS and random need about the same (ratio random/LDS 0.83-
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from typing import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 
-from . import convergence as cv
-from .design import NAMES, to_physical
-from .sampling import halton_unit as lds_points  # the workflow's own LDS and lattice points
-from .sampling import lattice_unit as lattice_points
+from . import study_rule as cv
+from ..design import NAMES, to_physical
+from ..sampling import halton_unit as lds_points  # the workflow's own LDS and lattice points
+from ..sampling import lattice_unit as lattice_points
 
 D = len(NAMES)
 
@@ -311,12 +310,6 @@ class StudyResult:
     table: pd.DataFrame
     summary: pd.DataFrame
     ratios: pd.DataFrame
-
-    def to_dict(self) -> dict:
-        """JSON-friendly (NaN -> None)."""
-        def records(df):
-            return json.loads(df.to_json(orient="records"))
-        return {"summary": records(self.summary), "ratios": records(self.ratios)}
 
 
 def study(**kwargs) -> StudyResult:

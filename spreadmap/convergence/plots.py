@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import NullFormatter
 
-from . import convergence as cv
-from .figures import new_figure, save_figure
-from .table import usable
+from . import study_rule as cv
+from ..figures import new_figure, save_figure
+from ..table import usable
 
 TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
 STAT_LABELS = {
@@ -218,4 +218,93 @@ def plot_sampling_study(table: pd.DataFrame, path_stem,
     ax.legend(fontsize="x-small", ncol=2)
     data = table.merge(summ[keys + ["median", "q25", "q75", "iqr", "not_converged"]], on=keys,
                        how="left")
+    return save_figure(fig, path_stem, data)
+
+
+# ----------------------------------------------------------------------------------------------
+# (4) the sampling study with noise
+# ----------------------------------------------------------------------------------------------
+NOISE_TITLES = {"mult3": "3 % multiplicative noise", "mult7": "7 % multiplicative noise",
+                "counting": "counting noise 0.45/sqrt(N), per-case SD known"}
+METHOD_STYLE = {"lds": ("C0", "o"), "random": ("C1", "v"), "lattice": ("C2", "s"), "active": ("C3", "D")}
+
+
+def plot_noisy_study(table: pd.DataFrame, summary: pd.DataFrame, path_stem) -> dict[str, Path]:
+    """Map RMSE against the number of cases, one panel per noise model: median over seeds
+    (line and markers) and the band between the quartiles, each method in its colour; the
+    targets of ``summary`` as dotted lines.  CSV: the median and quartiles behind the lines."""
+    from .noisy_study import rmse_summary  # local: keeps the plot module import-light
+
+    rs = rmse_summary(table)
+    noises = list(dict.fromkeys(table["noise"]))
+    fig = new_figure(4.2 * len(noises), 4.2)
+    axes = np.atleast_1d(fig.subplots(1, len(noises), sharey=True))
+    for ax, z in zip(axes, noises):
+        for m in dict.fromkeys(table["method"]):
+            g = rs[(rs["noise"] == z) & (rs["method"] == m)].sort_values("n")
+            if g.empty:
+                continue
+            c, mk = METHOD_STYLE.get(m, ("C4", "x"))
+            ax.fill_between(g["n"], g["q25"], g["q75"], color=c, alpha=0.18, lw=0)
+            ax.plot(g["n"], g["median"], color=c, marker=mk, ms=4, lw=1.4,
+                    label=f"{m} ({int(g['runs'].max())} seeds)")
+        for t in sorted(set(summary["target"])):
+            ax.axhline(t, color="0.3", ls=":", lw=1)
+            ax.annotate(f"target {t:g}", (1.0, t), xycoords=("axes fraction", "data"),
+                        ha="right", va="bottom", fontsize="x-small", color="0.3")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(NOISE_TITLES.get(z, z), fontsize="small")
+        ax.set_xlabel(N_LABEL)
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ticks = [16, 32, 64, 128, 256, 512]
+        ax.set_xticks([t for t in ticks if t <= table["n"].max() * 1.05], 
+                      [str(t) for t in ticks if t <= table["n"].max() * 1.05])
+        ax.grid(True, which="major", alpha=0.3)
+    axes[0].set_ylabel("map RMSE against the truth (MFR units) [-]")
+    axes[0].legend(fontsize="x-small")
+    fig.suptitle("GP map error by sampling design: median over seeds, band = quartiles", fontsize="small")
+    return save_figure(fig, path_stem, rs)
+
+
+# ----------------------------------------------------------------------------------------------
+# (5) the path of `snakemake converge`
+# ----------------------------------------------------------------------------------------------
+CRITERION_LABELS = {"cv_rmse": "CV RMSE / (factor x noise SD)",
+                    "map_change": "map change / (fraction x noise SD)",
+                    "ci": "CI half-width / tolerance (worst statistic)"}
+
+
+def plot_converge_path(record: Mapping, path_stem) -> dict[str, Path]:
+    """Each map criterion's value (ratio to its threshold: <= 1 holds) at every batch, the
+    study's rule (its largest change / its tolerance) beside them, and why the run stopped."""
+    path = record["criteria"]["path"]
+    rows = []
+    for h in path:
+        for c in CRITERION_LABELS:
+            if h.get(c):
+                rows.append({"n": h["n"], "criterion": c, "ratio": h[c]["value"], "holds": h[c]["holds"]})
+    tol = float(record.get("study_rule_tolerance", cv.DEFAULT_TOLERANCE))
+    for h in record.get("study_rule_path", []):
+        if h.get("max_change") is not None and np.isfinite(h["max_change"]):
+            rows.append({"n": h["n"], "criterion": "study_rule", "ratio": h["max_change"] / tol,
+                         "holds": h["max_change"] < tol})
+    data = pd.DataFrame(rows, columns=["n", "criterion", "ratio", "holds"])
+    fig = new_figure(7.0, 4.4)
+    ax = fig.subplots()
+    labels = {**CRITERION_LABELS, "study_rule": f"study's rule: largest change / {tol:g} (reported)"}
+    for i, (c, lab) in enumerate(labels.items()):
+        g = data[data["criterion"] == c]
+        if g.empty:
+            continue
+        req = c in record["criteria"]["stop_on"]
+        ax.plot(g["n"], g["ratio"], marker="o", ms=4, color=f"C{i}", ls="-" if req else "--",
+                label=lab + ("" if req or c == "study_rule" else " (not required)"))
+    ax.axhline(1.0, color="k", lw=1)
+    ax.set_yscale("log")
+    ax.set_xlabel(N_LABEL)
+    ax.set_ylabel("criterion / its threshold [-] (<= 1 holds)")
+    ax.set_title(f"converge: {record['reason']} after {record['n']} cases", fontsize="small")
+    ax.legend(fontsize="x-small")
+    ax.grid(True, alpha=0.3)
     return save_figure(fig, path_stem, data)

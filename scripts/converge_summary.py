@@ -1,0 +1,20 @@
+"""Snakemake entry: where `snakemake converge` stopped and why, with the path it took."""
+import json
+
+from spreadmap.convergence.plots import plot_converge_path
+from spreadmap.files import write_text_atomically
+from spreadmap.logs import log_to
+
+log_to(snakemake)  # noqa: F821
+
+sm = snakemake  # noqa: F821
+with open(sm.input[0]) as fh:
+    record = json.load(fh)
+write_text_atomically(sm.output.stopped, json.dumps(record, indent=1, default=str))
+lines = [record["summary"], "", "path (criterion / threshold at each batch; <= 1 holds):"]
+for h in record["criteria"]["path"]:
+    parts = [f"{c} {h[c]['value']:.2f}" for c in ("cv_rmse", "map_change", "ci") if h.get(c)]
+    lines.append(f"  {h['n']:5d} cases: " + ", ".join(parts))
+write_text_atomically(sm.output.summary, "\n".join(lines) + "\n")
+plot_converge_path(record, sm.output.path[: -len(".png")])
+print("\n".join(lines))

@@ -1,0 +1,149 @@
+"""Where the next batch of cases goes: where the model is least sure about the maps.
+
+After an LDS start, each batch is chosen from a large seeded candidate set (scrambled Halton,
+``candidates(n, seed)``) greedily, one point at a time, with the posterior updated after each
+pick (the GP's posterior variance does not depend on the values not yet observed, so the update
+is exact, not a guess).  The update is what keeps a batch from clustering: once a point is
+picked, the variance around it drops and the next pick goes elsewhere.
+
+Acquisitions (``acquisition``)
+------------------------------
+* ``ivr`` (integrated variance reduction, default): the candidate whose case would most reduce
+  the summed posterior variance of the map over ``reference`` points (the map grids: the design
+  box, the machine and the powder planes), sum_r cov(r, c)^2 / (var(c) + noise).  It spends cases
+  where they help the maps, not where the variance is largest for its own sake (often the
+  corners of the box, which the maps read little).
+* ``max_sd``: the candidate with the largest posterior variance.
+
+With several targets (MFR and PD) the scores are summed in units of each target's noise
+variance, so a target counts by how unsure its map is relative to what one case can resolve.
+
+Models without ``posterior_cov`` (any model behind the plain interface of ``model``) get
+``max_sd`` without the update, with an exclusion radius instead: no two picks (nor a pick and a
+finished case) closer than half the typical spacing of the grown sample.
+
+Reproducible: the same models, finished cases, seed and batch size give the same batch;
+another seed gives another candidate set and so another batch.
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from scipy.stats import qmc
+
+from ..design import NAMES, to_physical, to_unit
+
+ACQUISITIONS = ("ivr", "max_sd")
+
+
+def candidates(n: int, seed: int) -> np.ndarray:
+    """n scrambled Halton points of the unit cube, seeded (a set independent of the LDS sweep's)."""
+    return qmc.Halton(d=len(NAMES), scramble=True, seed=np.random.default_rng([int(seed), 16])).random(int(n))
+
+
+class _Posterior:
+    """Posterior (co)variances of one GP target over candidates C and references R, with exact
+    rank-one updates for every point added to the batch.  Standardised units / noise variance."""
+
+    def __init__(self, model, C: np.ndarray, R: np.ndarray | None):
+        X = model.X_train_unit
+        k = model.latent_kernel
+        K = k(X) + np.diag(model.train_noise_var())
+        L = np.linalg.cholesky(K + 1e-10 * np.eye(len(X)))
+        self.k, self.C, self.R = k, C, R
+        self.VC = np.linalg.solve(L, k(X, C))
+        self.noise = float(model.new_case_noise_var())
+        self.var = np.maximum(k.diag(C) - np.sum(self.VC**2, axis=0), 0.0)
+        self.us: list[np.ndarray] = []  # rank-one update vectors over C
+        if R is not None:
+            VR = np.linalg.solve(L, k(X, R))
+            self.covRC = k(R, C) - VR.T @ self.VC
+
+    def cov_C(self, j: int) -> np.ndarray:
+        """Current posterior covariance between all candidates and candidate j."""
+        c = self.k(self.C, self.C[j:j + 1])[:, 0] - self.VC.T @ self.VC[:, j]
+        for u in self.us:
+            c = c - u * u[j]
+        return c
+
+    def score(self, acquisition: str) -> np.ndarray:
+        if acquisition == "max_sd":
+            return self.var / self.noise
+        return np.sum(self.covRC**2, axis=0) / (self.var + self.noise) / self.noise
+
+    def add(self, j: int) -> None:
+        c = self.cov_C(j)
+        denom = np.sqrt(c[j] + self.noise)
+        u = c / denom
+        if self.R is not None:
+            self.covRC = self.covRC - np.outer(self.covRC[:, j] / denom, u)
+        self.var = np.maximum(self.var - u**2, 0.0)
+        self.us.append(u)
+
+
+def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = None,
+                 n_candidates: int = 4096, acquisition: str = "ivr",
+                 reference: np.ndarray | None = None, ranges: dict | None = None,
+                 max_reference: int = 1024, pending: np.ndarray | None = None) -> np.ndarray:
+    """The next ``n`` design points (physical units, NAMES order) for the fitted ``models``.
+
+    ``done``: the finished (or already scheduled) cases, physical units: used by the fallback's
+    exclusion radius (the GP already knows its training cases).  ``reference``: where the map is
+    read (``map_criteria.map_grids`` stacked), needed by ``ivr``; a seeded subset of at most
+    ``max_reference`` of them is used.  ``pending``: points already in this batch (physical
+    units, e.g. its LDS share), conditioned on before the picks (GP models only).
+    """
+    if acquisition not in ACQUISITIONS:
+        raise ValueError(f"acquisition {acquisition!r}; allowed: {list(ACQUISITIONS)}")
+    if n < 1:
+        raise ValueError(f"a batch needs n >= 1 (n = {n})")
+    C = candidates(max(int(n_candidates), n), seed)
+    if not all(hasattr(m, "posterior_cov") for m in models):
+        return _fallback(models, n, C, done, ranges)
+    R = None
+    if acquisition == "ivr":
+        if reference is None:
+            raise ValueError("acquisition 'ivr' needs reference points (the map grids)")
+        R = to_unit(np.asarray(reference, float), ranges)
+        if len(R) > max_reference:
+            pick = np.random.default_rng([int(seed), 17]).choice(len(R), max_reference, replace=False)
+            R = R[np.sort(pick)]
+    n_cand = len(C)
+    if pending is not None and len(pending):
+        C = np.vstack([C, to_unit(np.asarray(pending, float), ranges)])
+    posts = [_Posterior(m, C, R) for m in models]
+    for j in range(n_cand, len(C)):  # the pending points: update the posterior, never pick them
+        for p in posts:
+            p.add(j)
+    chosen: list[int] = list(range(n_cand, len(C)))
+    first = len(chosen)
+    for _ in range(int(n)):
+        score = sum(p.score(acquisition) for p in posts)
+        score[chosen] = -np.inf
+        j = int(np.argmax(score))
+        chosen.append(j)
+        for p in posts:
+            p.add(j)
+    return to_physical(C[chosen[first:]], ranges)
+
+
+def _fallback(models, n, C, done, ranges) -> np.ndarray:
+    phys = to_physical(C, ranges)
+    score = np.zeros(len(C))
+    for m in models:
+        _, sd = m.predict(phys, return_std=True)
+        score += (np.asarray(sd, float) / max(float(m.noise_sd), 1e-12)) ** 2
+    placed = [] if done is None else list(to_unit(np.asarray(done, float), ranges))
+    radius = 0.5 * (len(placed) + n) ** (-1.0 / len(NAMES))
+    chosen = []
+    for j in np.argsort(-score):
+        if all(np.linalg.norm(C[j] - p) >= radius for p in placed):
+            chosen.append(j)
+            placed.append(C[j])
+            if len(chosen) == n:
+                break
+    if len(chosen) < n:  # the radius left too few: fill with the next best
+        rest = [j for j in np.argsort(-score) if j not in chosen]
+        chosen += rest[: n - len(chosen)]
+    return phys[chosen]

@@ -1,0 +1,311 @@
+"""Is the map right?  The workflow's stopping criteria, stated against the noise.
+
+The study's rule (``study_rule``) asks whether five statistics of the sample stopped moving.
+With noisy cases it measures step size, not error: it stops on the budget, and its statistics
+converge to noise-biased values.  A user's question is about the map, so the workflow stops when
+these hold (each in config ``converge:``, each reported with the batch at which it held):
+
+1. ``cv_rmse`` -- the model's K-fold cross-validated RMSE against the cases at or below
+   ``factor`` x the noise SD.  *Why*: it is the error of the map at points the model has not
+   seen, measured, not assumed.  Against noisy observations it can never fall below the noise
+   SD (E[(y - m)^2] = noise^2 + map error^2), so the target is set against the noise: factor
+   1.2 means a map error of at most sqrt(1.2^2 - 1) = 0.66 noise SD.  The model, its
+   hyperparameters included, is refitted inside every fold.  Noise SD: the RMS of the table's
+   per-case ``{target}_sd`` when present, else the model's fitted noise.
+2. ``map_change`` -- the RMS (default; or the largest) change of the map's mean between the
+   previous batch and this one, over the map grids (a grid over the design box, the machine
+   map's h x v grid, the powder maps' d x f grid of config ``maps:``), below ``fraction`` x the
+   noise SD (default 0.2).  RMS by default because the largest change sits at the corners of
+   the box, where a GP extrapolates and moves most (measured: max ~4x the RMS at 80-96 cases);
+   the largest change of each grid is reported beside it.
+   *Why*: CV error is an average over the cases; a map that still moves where the user reads
+   it (the machine and powder planes) is not settled even when the average error is fine.
+   Stated against the noise because a change smaller than a fraction of one case's noise is
+   below what any single case could show.
+3. ``ci`` -- bootstrap confidence intervals (percentile, ``scipy.stats.bootstrap``) of the
+   partition statistics (mean, SD, median, skewness, excess kurtosis of each target) narrower
+   than a tolerance per statistic: half-width / max(|value|, floor) with the study's floors
+   (1 for skewness and kurtosis).  *Why*: the study reports these statistics; this says how
+   well the sample pins them down (their error), where the study's rule says only how much
+   they moved (their step).  On an LDS sample the case-resampling bootstrap is conservative
+   for the design-space part of the spread (QMC errors fall faster than i.i.d. ones) and right
+   for the noise part; it measures precision, not the noise bias of the SD and kurtosis.
+
+``evaluate`` computes all three at one batch, ``Tracker`` keeps the path (the first batch at
+which each held, and whether all the required ones hold now).
+"""
+from __future__ import annotations
+
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+from sklearn.model_selection import KFold
+
+from ..design import NAMES, bounds
+from .model import FitFunction, MapModel, table_data
+from .study_rule import DEFAULT_FLOORS, STATISTICS
+
+CRITERIA: tuple[str, ...] = ("cv_rmse", "map_change", "ci")
+DEFAULTS: dict[str, Any] = {
+    "stop_on": list(CRITERIA),
+    "hold_for": 1,
+    "cv_rmse": {"factor": 1.2, "folds": 5},
+    "map_change": {"fraction": 0.2, "statistic": "rms", "box_k": 5},
+    "ci": {"level": 0.9, "resamples": 1000,
+           "halfwidth": {"mean": 0.05, "std": 0.10, "median": 0.07, "skewness": 0.30,
+                         "kurtosis": 0.60}},
+}
+
+
+def settings(cfg: Mapping | None) -> dict[str, Any]:
+    """The criteria's settings: DEFAULTS overridden by config ``converge:`` (unknown criteria refused)."""
+    cfg = dict(cfg or {})
+    if cfg.get("_resolved"):  # already the output of settings(): apply nothing twice
+        return cfg
+    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in DEFAULTS.items()}
+    out["ci"]["halfwidth"] = dict(DEFAULTS["ci"]["halfwidth"])
+    for key in ("cv_rmse", "map_change", "ci"):
+        sub = dict(cfg.get(key) or {})
+        if key == "ci" and "halfwidth" in sub:
+            hw = dict(sub.pop("halfwidth") or {})
+            bad = set(hw) - set(STATISTICS)
+            if bad:
+                raise ValueError(f"config key 'converge.ci.halfwidth': unknown statistics {sorted(bad)}; "
+                                 f"allowed: {list(STATISTICS)}")
+            out["ci"]["halfwidth"].update(hw)
+            # null drops a statistic from the criterion (e.g. kurtosis, whose CI narrows slowly)
+            out["ci"]["halfwidth"] = {k: v for k, v in out["ci"]["halfwidth"].items() if v is not None}
+        out[key].update(sub)
+    if "stop_on" in cfg:
+        stop_on = list(cfg["stop_on"])
+        bad = set(stop_on) - set(CRITERIA)
+        if bad:
+            raise ValueError(f"config key 'converge.stop_on': unknown criteria {sorted(bad)}; allowed: {list(CRITERIA)}")
+        out["stop_on"] = stop_on
+    if "hold_for" in cfg:
+        out["hold_for"] = int(cfg["hold_for"])
+    if out["map_change"]["statistic"] not in ("max", "rms"):
+        raise ValueError(f"config key 'converge.map_change.statistic': {out['map_change']['statistic']!r}; "
+                         "allowed: max, rms")
+    out["_resolved"] = True
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# the map grids
+# ----------------------------------------------------------------------------------------------
+def map_grids(maps_cfg: Mapping | None = None, ranges: dict | None = None, box_k: int = 5,
+              n_d: int = 41, n_f: int = 5) -> dict[str, np.ndarray]:
+    """Points (physical units, NAMES order) where the maps are read.
+
+    * ``box``: box_k^4 cell centres of the design box (no face is over-weighted);
+    * ``machine``: the machine map's n_h x n_v grid of h and v at its f and d;
+    * ``powder``: the powder maps' n_d x n_f grid of d and f at their h and v.
+    Fixed values and sizes from config ``maps:`` (SPEC defaults otherwise).
+    """
+    maps_cfg = maps_cfg or {}
+    mach = {"f": 0.45, "d_um": 45.0, "n_h": 5, "n_v": 5, **(maps_cfg.get("machine") or {})}
+    powd = {"h_um": 57.0, "v_mm_s": 6.1, **(maps_cfg.get("powder") or {})}
+    low, high = bounds(ranges)
+    ix = {n: i for i, n in enumerate(NAMES)}
+
+    def axis(name, n):
+        return np.linspace(low[ix[name]], high[ix[name]], n)
+
+    def grid(**cols):
+        mesh = np.meshgrid(*[np.atleast_1d(np.asarray(cols[n], float)) for n in NAMES], indexing="ij")
+        return np.column_stack([m.ravel() for m in mesh])
+
+    centres = (np.arange(box_k) + 0.5) / box_k
+    box = grid(**{n: low[i] + centres * (high[i] - low[i]) for i, n in enumerate(NAMES)})
+    machine = grid(f=mach["f"], d_um=mach["d_um"], h_um=axis("h_um", int(mach["n_h"])),
+                   v_mm_s=axis("v_mm_s", int(mach["n_v"])))
+    powder = grid(f=axis("f", n_f), d_um=axis("d_um", n_d), h_um=powd["h_um"], v_mm_s=powd["v_mm_s"])
+    return {"box": box, "machine": machine, "powder": powder}
+
+
+# ----------------------------------------------------------------------------------------------
+# (1) cross-validated RMSE against the noise
+# ----------------------------------------------------------------------------------------------
+def cv_rmse(X, y, noise_sd, fit: FitFunction, folds: int = 5, seed: int = 0) -> dict[str, float]:
+    """K-fold CV (shuffled, seeded) of ``fit``: the model is refitted inside every fold.
+
+    Returns ``rmse`` (held-out predictions against the observed cases) and
+    ``heldout_noise_sd`` (the RMS per-case noise SD of the held-out cases, NaN when not given).
+    """
+    X = np.asarray(X, float)
+    y = np.asarray(y, float)
+    folds = int(min(folds, len(y)))
+    if folds < 2:
+        raise ValueError(f"cross-validation needs at least 2 cases, got {len(y)}")
+    pred = np.empty_like(y)
+    for train, test in KFold(folds, shuffle=True, random_state=seed).split(X):
+        sd = None if noise_sd is None else np.asarray(noise_sd, float)[train]
+        pred[test] = fit(X[train], y[train], sd).predict(X[test])
+    rmse = float(np.sqrt(np.mean((pred - y) ** 2)))
+    held = float(np.sqrt(np.mean(np.asarray(noise_sd, float) ** 2))) if noise_sd is not None else float("nan")
+    return {"rmse": rmse, "heldout_noise_sd": held}
+
+
+# ----------------------------------------------------------------------------------------------
+# (2) the maps' change between batches
+# ----------------------------------------------------------------------------------------------
+def map_change(prev: MapModel, curr: MapModel, grids: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """Max and RMS of |mean_curr - mean_prev| over all grid points, and the max per grid."""
+    out: dict[str, float] = {}
+    diffs = []
+    for name, pts in grids.items():
+        d = np.abs(np.asarray(curr.predict(pts), float) - np.asarray(prev.predict(pts), float))
+        out[f"max_{name}"] = float(np.max(d))
+        diffs.append(d)
+    alld = np.concatenate(diffs)
+    out["max"] = float(np.max(alld))
+    out["rms"] = float(np.sqrt(np.mean(alld**2)))
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# (3) bootstrap confidence intervals of the partition statistics
+# ----------------------------------------------------------------------------------------------
+def _stat_functions():
+    return {
+        "mean": lambda x, axis=-1: np.mean(x, axis=axis),
+        "std": lambda x, axis=-1: np.std(x, ddof=1, axis=axis),
+        "median": lambda x, axis=-1: np.median(x, axis=axis),
+        "skewness": lambda x, axis=-1: stats.skew(x, bias=True, axis=axis),
+        "kurtosis": lambda x, axis=-1: stats.kurtosis(x, fisher=True, bias=True, axis=axis),
+    }
+
+
+def bootstrap_ci(values, level: float = 0.9, resamples: int = 1000, seed: int = 0,
+                 statistics: Sequence[str] = STATISTICS) -> dict[str, dict[str, float]]:
+    """Percentile bootstrap CI of each statistic (the study's estimators), seeded.
+
+    Returns ``{statistic: {"value", "low", "high", "halfwidth"}}``; NaN for fewer than 3 values.
+    """
+    x = np.asarray(values, float)
+    x = x[np.isfinite(x)]
+    funcs = _stat_functions()
+    out = {}
+    for i, s in enumerate(statistics):
+        if x.size < 3 or np.ptp(x) == 0:
+            out[s] = {"value": float("nan"), "low": float("nan"), "high": float("nan"),
+                      "halfwidth": float("nan")}
+            continue
+        res = stats.bootstrap((x,), funcs[s], n_resamples=int(resamples), confidence_level=level,
+                              method="percentile", vectorized=True,
+                              rng=np.random.default_rng([int(seed), i]))
+        lo, hi = float(res.confidence_interval.low), float(res.confidence_interval.high)
+        out[s] = {"value": float(funcs[s](x)), "low": lo, "high": hi, "halfwidth": (hi - lo) / 2}
+    return out
+
+
+def ci_widths(values, halfwidth: Mapping[str, float], level: float = 0.9, resamples: int = 1000,
+              seed: int = 0, floors: Mapping[str, float] | None = None) -> dict[str, dict[str, float]]:
+    """Bootstrap CIs with each half-width relative to max(|value|, floor) and its tolerance."""
+    fl = {**DEFAULT_FLOORS, **(floors or {})}
+    cis = bootstrap_ci(values, level, resamples, seed, statistics=tuple(halfwidth))
+    for s, c in cis.items():
+        c["relative_halfwidth"] = c["halfwidth"] / max(abs(c["value"]), fl[s]) if np.isfinite(c["value"]) else float("nan")
+        c["tolerance"] = float(halfwidth[s])
+        c["ratio"] = c["relative_halfwidth"] / c["tolerance"]
+    return cis
+
+
+# ----------------------------------------------------------------------------------------------
+# all three at one batch
+# ----------------------------------------------------------------------------------------------
+def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("mfr", "pd"),
+             prev_table: pd.DataFrame | None = None, grids: Mapping[str, np.ndarray] | None = None,
+             cfg: Mapping | None = None, seed: int = 0,
+             floors: Mapping[str, float] | None = None,
+             stats_table: pd.DataFrame | None = None) -> dict[str, Any]:
+    """The three criteria on the cases of ``table`` (and the previous batch's ``prev_table``).
+
+    Each criterion gets ``value`` (the worst target's ratio to its threshold: <= 1 holds),
+    ``holds``, and per target the numbers behind it.  ``map_change`` is None without a
+    previous table.  ``models`` holds the fitted models (not JSON; dropped by ``to_json``).
+    ``stats_table``: the cases whose statistics the CIs are about (default ``table``; with active
+    batches, the LDS cases only: the others are not a uniform sample of the design space).
+    """
+    s = settings(cfg)
+    grids = grids if grids is not None else map_grids(box_k=int(s["map_change"]["box_k"]))
+    out: dict[str, Any] = {"n_cases": int(len(table)), "models": {}}
+    per: dict[str, dict] = {c: {} for c in CRITERIA}
+    for t in targets:
+        X, y, sd = table_data(table, t)
+        model = fit(X, y, sd)
+        out["models"][t] = model
+        noise = float(np.sqrt(np.mean(sd**2))) if sd is not None else float(model.noise_sd)
+        source = "per-case noise of the table" if sd is not None else "the model's fitted noise"
+        c = cv_rmse(X, y, sd, fit, folds=int(s["cv_rmse"]["folds"]), seed=seed)
+        thr = float(s["cv_rmse"]["factor"]) * noise
+        per["cv_rmse"][t] = {"rmse": c["rmse"], "noise_sd": noise, "noise_source": source,
+                             "threshold": thr, "ratio": c["rmse"] / thr,
+                             "map_error_estimate": float(np.sqrt(max(c["rmse"] ** 2 - noise**2, 0.0)))}
+        if prev_table is not None:
+            Xp, yp, sdp = table_data(prev_table, t)
+            ch = map_change(fit(Xp, yp, sdp), model, grids)
+            thr = float(s["map_change"]["fraction"]) * noise
+            stat = s["map_change"]["statistic"]
+            per["map_change"][t] = {**ch, "noise_sd": noise, "threshold": thr, "statistic": stat,
+                                    "ratio": ch[stat] / thr}
+        y_stats = y if stats_table is None else table_data(stats_table, t)[1]
+        cis = ci_widths(y_stats, s["ci"]["halfwidth"], level=float(s["ci"]["level"]),
+                        resamples=int(s["ci"]["resamples"]), seed=seed, floors=floors)
+        per["ci"][t] = {k: {kk: float(vv) for kk, vv in v.items()} for k, v in cis.items()}
+        per["ci"][t]["ratio"] = float(max(v["ratio"] for v in cis.values()))
+    for c in CRITERIA:
+        if not per[c]:
+            out[c] = None
+            continue
+        ratio = max(v["ratio"] for v in per[c].values())
+        out[c] = {"value": float(ratio), "holds": bool(ratio <= 1.0), "targets": per[c]}
+    return out
+
+
+def to_json(result: Mapping[str, Any]) -> dict[str, Any]:
+    """``evaluate``'s result without the fitted models."""
+    return {k: v for k, v in result.items() if k != "models"}
+
+
+class Tracker:
+    """The path of a run: for every batch the criteria, the first batch at which each held, and
+    the stop decision (all criteria of ``stop_on`` hold at ``hold_for`` consecutive batches)."""
+
+    def __init__(self, stop_on: Sequence[str] = CRITERIA, hold_for: int = 1,
+                 history: Sequence[Mapping] | None = None):
+        bad = set(stop_on) - set(CRITERIA)
+        if bad:
+            raise ValueError(f"unknown criteria {sorted(bad)}; allowed: {list(CRITERIA)}")
+        self.stop_on = list(stop_on)
+        self.hold_for = max(int(hold_for), 1)
+        self.history: list[dict] = [dict(h) for h in (history or [])]
+
+    def add(self, n_cases: int, result: Mapping[str, Any]) -> dict:
+        entry = {"n": int(n_cases)}
+        for c in CRITERIA:
+            r = result.get(c)
+            entry[c] = None if r is None else {"value": r["value"], "holds": r["holds"]}
+        entry["all_hold"] = all(entry[c] is not None and entry[c]["holds"] for c in self.stop_on)
+        self.history.append(entry)
+        return entry
+
+    def first_held(self) -> dict[str, int | None]:
+        """The first batch (number of cases) at which each criterion held."""
+        out = {}
+        for c in CRITERIA:
+            out[c] = next((h["n"] for h in self.history if h.get(c) and h[c]["holds"]), None)
+        return out
+
+    def stop(self) -> bool:
+        tail = self.history[-self.hold_for:]
+        return len(tail) == self.hold_for and all(h["all_hold"] for h in tail)
+
+    def summary(self) -> dict[str, Any]:
+        last = self.history[-1] if self.history else {}
+        return {"stop_on": self.stop_on, "hold_for": self.hold_for, "first_held": self.first_held(),
+                "now": {c: last.get(c) for c in CRITERIA}, "criteria_met": self.stop(),
+                "path": self.history}

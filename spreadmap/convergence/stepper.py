@@ -1,0 +1,172 @@
+"""One step of ``snakemake converge``: given the finished cases, stop or choose the next batch.
+
+The run starts with ``converge.start`` LDS cases; after each batch ``step`` evaluates the map
+criteria (``map_criteria``), keeps the path (the criteria at every batch, the first batch at
+which each held), reports the study's rule beside them (``study_rule.batches_until_converged``
+on the cases in run order, same batches), and decides:
+
+* ``criteria met``: every criterion of ``converge.stop_on`` holds (``hold_for`` batches in a row);
+* ``case budget``: ``converge.budget`` cases run;
+* ``CPU budget``: the cases' CPU time (their ``cpu_time``, else ``wall_time``) reached
+  ``converge.cpu_budget_h``;
+* otherwise the next batch: ``converge.batch`` points (fewer if the budget is closer): with
+  ``sampling: active`` a share ``lds_share`` of them are the next points of the LDS sequence and
+  the rest are chosen by ``active.choose_batch`` (conditioned on that LDS share); with
+  ``sampling: lds`` all are the next LDS points.
+
+Why an LDS share: active cases are not a uniform sample of the design space, so statistics of
+the cases (the study's five statistics, their bootstrap CIs) would describe where the model was
+unsure, not the design space.  Those two are computed on the LDS cases only (the start and the
+LDS share of every batch, ``is_lds`` in the record), which stay a prefix of the LDS sequence;
+the map criteria (CV RMSE, map change) use every case.
+
+Everything the step needs is its arguments, so it is tested without Snakemake or YADE.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+from ..cases import rounded
+from ..design import NAMES
+from ..sampling import halton
+from ..table import usable
+from . import active, map_criteria
+from .model import FitFunction, make_gp_fit
+from .study_rule import batches_until_converged
+
+STEP_DEFAULTS: dict[str, Any] = {
+    "start": 32, "batch": 16, "budget": 512, "cpu_budget_h": None, "sampling": "active",
+    "acquisition": "ivr", "candidates": 4096, "seed": 7, "k_consecutive": 3, "lds_share": 0.5,
+}
+
+
+def step_settings(cfg: Mapping | None) -> dict[str, Any]:
+    cfg = dict(cfg or {})
+    out = {**STEP_DEFAULTS, **{k: v for k, v in cfg.items() if k in STEP_DEFAULTS}}
+    if out["sampling"] not in ("active", "lds"):
+        raise ValueError(f"config key 'converge.sampling': {out['sampling']!r}; allowed: active, lds")
+    if out["acquisition"] not in active.ACQUISITIONS:
+        raise ValueError(f"config key 'converge.acquisition': {out['acquisition']!r}; "
+                         f"allowed: {list(active.ACQUISITIONS)}")
+    if not 0.0 <= float(out["lds_share"]) <= 1.0:
+        raise ValueError(f"config key 'converge.lds_share': {out['lds_share']!r}; allowed: 0 to 1")
+    out["criteria"] = map_criteria.settings(cfg)
+    return out
+
+
+def cpu_hours(table: pd.DataFrame) -> float:
+    """CPU hours of the cases: ``cpu_time`` (s), ``wall_time`` where it is missing."""
+    cpu = pd.to_numeric(table.get("cpu_time", pd.Series(np.nan, index=table.index)), errors="coerce")
+    wall = pd.to_numeric(table.get("wall_time", pd.Series(np.nan, index=table.index)), errors="coerce")
+    return float(np.nansum(cpu.fillna(wall).to_numpy(float))) / 3600.0
+
+
+def _lds_per_batch(s: Mapping) -> int:
+    return int(s["batch"]) if s["sampling"] == "lds" else int(round(float(s["lds_share"]) * int(s["batch"])))
+
+
+def _study_rule(table: pd.DataFrame, targets: Sequence[str], s: Mapping, n: int,
+                tolerance: float, floors) -> dict[str, Any]:
+    """The study's rule on the LDS cases (``table``), checked after every batch's LDS share."""
+    ok = usable(table)
+    values = np.where(ok[:, None], table[list(targets)].to_numpy(float), np.nan)
+    res = batches_until_converged(lambda m: values[:m], batch_size=max(_lds_per_batch(s), 1),
+                                  k_consecutive=int(s["k_consecutive"]), budget=n,
+                                  start=min(int(s["start"]), n), tolerance=tolerance, floors=floors,
+                                  names=tuple(targets))
+    last = res["history"][-1]
+    return {"rule": (f"all five statistics of {', '.join(targets)} change by < {tolerance:g} between "
+                     f"batches, {s['k_consecutive']} batches in a row (the study's rule)"),
+            "converged": res["reason"] == "converged", "converged_at": res["converged_n"],
+            "max_change_now": last["max_change"], "streak_now": last["streak"]}
+
+
+def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | None = None,
+         fit: FitFunction | None = None, ranges: dict | None = None, maps_cfg: Mapping | None = None,
+         lds_seed: int = 42, targets: Sequence[str] = ("mfr", "pd"),
+         tolerance: float = 0.005, floors: Mapping | None = None) -> dict[str, Any]:
+    """The decision after ``n`` cases (``table``: their rows in run order, the previous step's
+    ``n_prev`` cases first).  Returns the JSON-ready step record (see the module docstring)."""
+    s = step_settings(cfg)
+    crit = s["criteria"]
+    if len(table) != n:
+        raise ValueError(f"the step after {n} cases got a table of {len(table)} rows")
+    fit = fit or make_gp_fit(ranges)
+    grids = map_criteria.map_grids(maps_cfg, ranges, box_k=int(crit["map_change"]["box_k"]))
+    n_prev = None if prev_step is None else int(prev_step["n"])
+    is_lds = [True] * n if prev_step is None else list(prev_step["is_lds"])
+    if len(is_lds) != n:
+        raise ValueError(f"the previous step lists {len(is_lds)} cases, the table has {n}")
+    lds_table = table[np.asarray(is_lds, bool)]
+    result = map_criteria.evaluate(table, fit, targets, None if n_prev is None else table.iloc[:n_prev],
+                                   grids, crit, seed=0, floors=floors, stats_table=lds_table)
+    tracker = map_criteria.Tracker(crit["stop_on"], crit["hold_for"],
+                                   None if prev_step is None else prev_step["criteria"]["path"])
+    tracker.add(n, result)
+    cpu_h = cpu_hours(table)
+    reason = None
+    if tracker.stop():
+        reason = "criteria met"
+    elif n >= int(s["budget"]):
+        reason = "case budget"
+    elif s["cpu_budget_h"] is not None and cpu_h >= float(s["cpu_budget_h"]):
+        reason = "CPU budget"
+    record: dict[str, Any] = {
+        "n": int(n), "usable": int(usable(table).sum()), "cpu_hours": cpu_h,
+        "stop": reason is not None, "reason": reason or "criteria not met yet",
+        "criteria": {**tracker.summary(), "at_this_batch": map_criteria.to_json(result)},
+        "study_rule": _study_rule(lds_table, targets, s, len(lds_table), tolerance, floors),
+        "study_rule_path": list((prev_step or {}).get("study_rule_path", [])),
+        "next_n": None, "next_batch": [], "is_lds": is_lds, "n_lds": int(sum(is_lds)),
+        "settings": {k: v for k, v in s.items() if k != "criteria"},
+        "study_rule_tolerance": float(tolerance),
+    }
+    record["study_rule_path"].append({"n": int(n), "n_lds": int(len(lds_table)),
+                                      "max_change": record["study_rule"]["max_change_now"],
+                                      "streak": record["study_rule"]["streak_now"]})
+    if reason is None:
+        size = min(int(s["batch"]), int(s["budget"]) - n)
+        k_lds = size if s["sampling"] == "lds" else min(_lds_per_batch(s), size)
+        n_lds = int(sum(is_lds))  # LDS points used so far: the next ones continue the sequence
+        pts = halton(n_lds + k_lds, lds_seed, ranges)[list(NAMES)].to_numpy()[n_lds:]
+        if k_lds < size:
+            reference = np.vstack(list(grids.values()))
+            models = [result["models"][t] for t in targets]
+            more = active.choose_batch(models, size - k_lds, seed=int(s["seed"]) * 1_000_003 + n,
+                                       done=table[list(NAMES)].to_numpy(float),
+                                       n_candidates=int(s["candidates"]), acquisition=s["acquisition"],
+                                       reference=reference, ranges=ranges, pending=pts)
+            pts = np.vstack([pts, more])
+        record["next_n"] = n + size
+        record["next_batch"] = [rounded(dict(zip(NAMES, map(float, p)))) for p in pts]
+        record["is_lds"] = is_lds + [True] * k_lds + [False] * (size - k_lds)
+    record["summary"] = describe(record)
+    return record
+
+
+def describe(record: Mapping[str, Any]) -> str:
+    """A few lines a user reads: why the run stopped (or not), how far each criterion is."""
+    c = record["criteria"]
+    lines = [f"after {record['n']} cases ({record['usable']} usable, {record['cpu_hours']:.2f} CPU h): "
+             f"{record['reason']}"]
+    for name in map_criteria.CRITERIA:
+        now = c["now"].get(name)
+        first = c["first_held"].get(name)
+        req = "required" if name in c["stop_on"] else "reported"
+        if now is None:
+            lines.append(f"  {name} ({req}): not evaluated yet (needs a previous batch)")
+            continue
+        state = "holds" if now["holds"] else f"{now['value']:.3f} x its threshold"
+        held = f"first held at {first} cases" if first is not None else "never held yet"
+        lines.append(f"  {name} ({req}): {state}; {held}")
+    sr = record["study_rule"]
+    lines.append(f"  study's rule (reported): {'converged at ' + str(sr['converged_at']) if sr['converged'] else 'not converged'}"
+                 + ("" if sr["max_change_now"] is None or (isinstance(sr["max_change_now"], float) and math.isnan(sr["max_change_now"]))
+                    else f"; largest change now {sr['max_change_now']:.4f}"))
+    if record["next_n"]:
+        lines.append(f"  next: {len(record['next_batch'])} cases ({record['settings']['sampling']}), up to {record['next_n']}")
+    return "\n".join(lines)
