@@ -73,12 +73,16 @@ def test_converge_stops_at_the_budget_when_the_criterion_never_holds(finished_ru
     run = snakemake(finished_run, "converge", timeout=600)
     assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
     stopped = json.loads((finished_run / "results" / "converge" / "stopped.json").read_text())
-    assert stopped["reason"] == "budget" and stopped["n"] == 8  # 0.5 % is out of reach of 8 cases
+    # 4, then 6, then 8 smoke cases: too few, or too noisy, for the map criteria; the run ends on its budget
+    assert stopped["reason"] == "case budget" and stopped["n"] == 8
 
 
 def test_converge_stops_early_when_the_criterion_holds_at_once(finished_run):
-    cfg = deep_update(copy.deepcopy(SMALL_RUN), {"convergence": {"tolerance": 100.0}, "converge": {"budget": 12},
-                                                 "sweeps": {"lds": {"partitions": [6, 12]}}})
+    # thresholds no map can miss: the CV RMSE and the CIs hold at the first step with enough cases
+    cfg = deep_update(copy.deepcopy(SMALL_RUN), {"converge": {
+        "start": 6, "budget": 12, "stop_on": ["cv_rmse", "ci"], "cv_rmse": {"factor": 1000.0},
+        "ci": {"halfwidth": {"mean": 1000.0, "std": None, "median": None, "skewness": None, "kurtosis": None}}},
+        "sweeps": {"lds": {"partitions": [6, 12]}}})
     write_config(finished_run, cfg, drop=("sweeps", "points"))
     (finished_run / "results" / "converge").exists() and [p.unlink() for p in (finished_run / "results" / "converge").glob("*.json")]
     dry = snakemake(finished_run, "converge", "-n")
@@ -86,4 +90,4 @@ def test_converge_stops_early_when_the_criterion_holds_at_once(finished_run):
     run = snakemake(finished_run, "converge", timeout=600)
     assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
     stopped = json.loads((finished_run / "results" / "converge" / "stopped.json").read_text())
-    assert stopped["reason"] == "converged" and stopped["n"] < 12
+    assert stopped["reason"] == "criteria met" and stopped["n"] < 12

@@ -48,6 +48,7 @@ from .model import FitFunction, MapModel, table_data
 from .study_rule import DEFAULT_FLOORS, STATISTICS
 
 CRITERIA: tuple[str, ...] = ("cv_rmse", "map_change", "ci")
+MIN_CASES = 5  # usable cases a target needs before its model is fitted and the criteria evaluated
 DEFAULTS: dict[str, Any] = {
     "stop_on": list(CRITERIA),
     "hold_for": 1,
@@ -236,6 +237,9 @@ def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("m
     per: dict[str, dict] = {c: {} for c in CRITERIA}
     for t in targets:
         X, y, sd = table_data(table, t)
+        if len(y) < MIN_CASES:  # too few usable cases to fit and cross-validate: no criterion holds yet
+            out.setdefault("too_few_cases", {})[t] = int(len(y))
+            continue
         model = fit(X, y, sd)
         out["models"][t] = model
         noise = float(np.sqrt(np.mean(sd**2))) if sd is not None else float(model.noise_sd)
@@ -245,7 +249,7 @@ def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("m
         per["cv_rmse"][t] = {"rmse": c["rmse"], "noise_sd": noise, "noise_source": source,
                              "threshold": thr, "ratio": c["rmse"] / thr,
                              "map_error_estimate": float(np.sqrt(max(c["rmse"] ** 2 - noise**2, 0.0)))}
-        if prev_table is not None:
+        if prev_table is not None and len(table_data(prev_table, t)[1]) >= MIN_CASES:
             Xp, yp, sdp = table_data(prev_table, t)
             ch = map_change(fit(Xp, yp, sdp), model, grids)
             thr = float(s["map_change"]["fraction"]) * noise

@@ -130,7 +130,8 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
                                       "streak": record["study_rule"]["streak_now"]})
     if reason is None:
         size = min(int(s["batch"]), int(s["budget"]) - n)
-        k_lds = size if s["sampling"] == "lds" else min(_lds_per_batch(s), size)
+        fitted = all(t in result["models"] for t in targets)  # too few cases yet: the batch continues LDS
+        k_lds = size if (s["sampling"] == "lds" or not fitted) else min(_lds_per_batch(s), size)
         n_lds = int(sum(is_lds))  # LDS points used so far: the next ones continue the sequence
         pts = halton(n_lds + k_lds, lds_seed, ranges)[list(NAMES)].to_numpy()[n_lds:]
         if k_lds < size:
