@@ -250,6 +250,25 @@ def report(rows: list[dict], arms: list[str]) -> str:
                 if all(len(d.get(a, [])) >= 2 for a in arms if p in ARMS[a].get("points", POINTS))}
     lines = [f"# Information per CPU-second: {', '.join(arms)}", "",
              f"{len(ok)} of {len(rows)} cases ok; points with every arm: {len(complete)}.", ""]
+    lines += ["## Spheres measured per CPU-second (the information per CPU-second if c is the same in every arm)", "",
+              "| point | " + " | ".join(arms) + " |", "|---|" + "---|" * len(arms)]
+    ratios: dict = {a: [] for a in arms}
+    for p in sorted(complete):
+        cells = []
+        for a in arms:
+            rows_a = complete[p].get(a, [])
+            if not rows_a:
+                cells.append("-")
+                continue
+            rate = np.mean([r["n_passed"] for r in rows_a]) / np.mean([r["cpu_time"] for r in rows_a])
+            today = complete[p].get("today", [])
+            base = (np.mean([r["n_passed"] for r in today]) / np.mean([r["cpu_time"] for r in today])) if today else math.nan
+            ratios[a].append(rate / base)
+            cells.append(f"{rate:.2f} ({rate / base:.2f}x)")
+        lines.append(f"| {p} | " + " | ".join(cells) + " |")
+    lines += [""] + [f"- **{a}**: {np.mean(ratios[a]):.2f}x today's spheres per CPU-second, mean over "
+                     f"{len(ratios[a])} points (range {min(ratios[a]):.2f}-{max(ratios[a]):.2f})"
+                     for a in arms if a != "today" and ratios[a]] + [""]
     for target in ("mfr", "pd"):
         lines += [f"## {target.upper()}", "",
                   "| point | arm | seeds | mean | seed SD | CV | recorded SD / seed SD | N passed | CPU s | info / CPU s |",
