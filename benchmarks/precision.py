@@ -153,11 +153,28 @@ def case_row(job: dict, config: dict) -> dict:
     if raw_path.exists():
         raw = json.loads(raw_path.read_text())
         raw["params"].setdefault("point", dict(zip(("f", "d_um", "h_um", "v_mm_s"), job["point"])))
+        recount_escaped(raw)
         # the PD box's clearance must fit every arm's window (today's: 8 d, a 2 d blade)
         m = case_metrics({**raw, "cpu_time": row["cpu_time"]}, config["regime"], config["stability"], config["metrics"])
         for key in CASE_COLUMNS:
             row[key] = m.get(key, math.nan)
     return row
+
+
+def recount_escaped(raw: dict) -> None:
+    """Spheres through a side wall or the floor at the run's end (the window_end snapshot), against
+    the floor's real top (geometry.floor_top: -d under a rough substrate). The scene's own count
+    used z = 0 until commit 54bad9d and so counted the spheres that rolled beyond the substrate's
+    end onto the floor below it, which flagged most rough-substrate cases of this run."""
+    geometry = raw.get("geometry") or {}
+    end = (raw.get("snapshots") or {}).get("window_end")
+    if "floor_top" not in geometry or not end:
+        return
+    pos, r = np.asarray(end["positions"], float), np.asarray(end["radii"], float)
+    x_lo, x_hi = geometry["floor_x"]
+    on_floor = (pos[:, 0] >= x_lo) & (pos[:, 0] <= x_hi)
+    inside = ((pos[:, 1] >= -r) & (pos[:, 1] <= geometry["width"] + r) & (pos[:, 2] >= geometry["floor_top"] - r))
+    raw["escaped_particles"] = int(np.sum(on_floor & ~inside))
 
 
 def information(rows: list[dict], target: str) -> dict:
