@@ -14,7 +14,10 @@ CAPTIONS = sorted((ROOT / "rules" / "captions").glob("*.rst"))
 SURROGATE = {"parity", "r2_vs_neurons", "learning_curve"}  # the surrogate's own captions: tested with it
 # numbers that are the code's, not the config's: 4-D (the design space), 2 standard errors (the
 # fidelity study's resolution), 95 % (the bootstrap intervals of the Sobol indices)
-FIXED = {"sampling_study": {"4"}, "fidelity_pareto": {"2"}, "sensitivity_ranking": {"95"}}
+# numbers that are method, written in the code, not settings: a ratio's threshold 1, the contour
+# levels of the regime probabilities, the 95 % draws' intervals and the 97.5 % ordering rule
+FIXED = {"sampling_study": {"4"}, "fidelity_pareto": {"2"}, "sensitivity_ranking": {"95", "97.5"},
+         "converge_path": {"1"}, "regime_overlay": {"0.1", "0.5", "0.9"}, "powder_band_map": {"0", "95"}}
 
 
 def render(path, config):
