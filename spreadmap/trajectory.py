@@ -292,7 +292,6 @@ def build_case_figure(raw: dict, colour_by: str = "speed"):
     substrate = raw.get("substrate") or {}
     sub_pos = np.asarray(substrate.get("positions") or np.zeros((0, 3)), float).reshape(-1, 3) * UM
     sub_rad = np.asarray(substrate.get("radii") or [], float) * UM
-    d = cv["d_um"] or 30.0
     title = (f"Powder spreading, case {cv['case_id']}\n"
              f"f = {_fmt_num(pt.get('f'))},  d = {_fmt_num(pt.get('d_um'))} µm,  h = {_fmt_num(pt.get('h_um'))} µm"
              + (f" (h/d = {pt['h_um'] / pt['d_um']:.2f})" if pt.get("h_um") and pt.get("d_um") else "")

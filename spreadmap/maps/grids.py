@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy.stats import norm
 
 from ..design import NAMES, bounds
 from ..surrogate.settings import LAYER_TARGETS
