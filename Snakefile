@@ -1,9 +1,11 @@
 # spreadmap: DEM powder-spreading cases (YADE) -> MFR/PD table -> analyses -> design maps.
-#   snakemake --cores 2          the main job on config.yaml (profile profiles/default)
+#   snakemake --cores 2          the main job on config.yaml (profile profiles/default): LDS cases, then
+#                                batches until the map criteria hold or the budget is spent, maps
 #   snakemake -n                 what would run
 #   snakemake points             your chosen points only (config `points:`)
-#   snakemake sweeps             the sweeps' results tables and the run summary
-#   snakemake converge           grow the LDS sweep until its statistics converge (or the budget)
+#   snakemake sweeps             the study's protocol: fixed LDS and lattice sweeps, their statistics
+#   snakemake converge           the main job's cases and stopping decision only
+#   snakemake sampling           the DEM-free sampling-design study (on the main job's surrogate too)
 #   snakemake fidelity           each preset's error against `reference`, its noise and its cost
 #   snakemake --report report.html   every figure with its caption, the tables and the summary
 from snakemake.utils import min_version
@@ -30,13 +32,13 @@ include: "rules/fidelity.smk"
 
 
 rule all:
+    """The main job: a map you can trust within a budget. LDS cases, then batches until the map
+    criteria hold or the budget is spent (rules/converge.smk); the surrogate and the maps on that
+    run's table; predictions at the chosen points; pictures of the named cases."""
     default_target: True
     input:
-        [f"results/samples/{name}.csv" for name in SWEEPS],
-        set_tables(),
+        "results/converge/stopped.json",
         "results/summary.json",
-        "results/convergence/summary.json",
-        "results/convergence/sampling_study.csv",
         "results/surrogate/model.joblib",
         prediction_targets(),
         "results/maps/sensitivity_ranking_table.csv",
@@ -45,9 +47,20 @@ rule all:
 
 
 rule sweeps:
+    """The study's protocol: the fixed LDS and lattice sweeps and the five statistics per partition
+    (the study's convergence rule)."""
     input:
+        [f"results/samples/{name}.csv" for name in SWEEPS],
         [f"results/tables/{name}.csv" for name in SWEEPS],
-        "results/summary.json",
+        "results/sweeps_summary.json",
+        "results/convergence/summary.json",
+
+
+rule sampling:
+    """The DEM-free sampling-design study (LDS, lattice, random; the study's rule) on smooth test
+    functions and on the main job's surrogate."""
+    input:
+        "results/convergence/sampling_study.csv",
 
 
 rule points:

@@ -2,10 +2,15 @@
 """Is the seed-to-seed spread of MFR and PD counting noise, relative SD = c / sqrt(N)? Checks the
 constant c of the case noise estimate (config `metrics.counting_noise_c`) against a table of
 cases run with several packing seeds per cell (default: the published fidelity study,
-docs/fidelity/cases_presets.csv; cells = preset x point).
+docs/fidelity_flat/cases_presets.csv; cells = preset x point; the study's flat floor). The default
+scene (rough substrate, windows sized by a precision target) is checked on the precision
+benchmark's rough-substrate arms, whose cases record their own count N:
+
+    .venv/bin/python benchmarks/counting_noise.py --cases docs/precision/cases.csv --group arm point \
+        --arms physics precision precision_slow_settle shipped
 
 Per cell: seed SD of MFR and PD, N = MFR x h x W x window / sphere volume (W and the window from
-the preset of the config the cases ran with, `--run-config`, default docs/fidelity/config.yaml;
+the preset of the config the cases ran with, `--run-config`, default docs/fidelity_flat/config.yaml;
 for PD the published box was the window), c = relative SD x
 sqrt(N) with its 90 % chi-square interval; pooled c over the cells; Bartlett's test (scipy) that c
 is the same in every cell (the residuals (value / cell mean - 1) x sqrt(N) have equal variances).
@@ -35,17 +40,23 @@ from spreadmap.metrics import counting_constant, pooled_constant  # noqa: E402
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", default=str(ROOT / "docs" / "fidelity" / "cases_presets.csv"))
-    ap.add_argument("--run-config", default=str(ROOT / "docs" / "fidelity" / "config.yaml"),
+    ap.add_argument("--cases", default=str(ROOT / "docs" / "fidelity_flat" / "cases_presets.csv"))
+    ap.add_argument("--run-config", default=str(ROOT / "docs" / "fidelity_flat" / "config.yaml"),
                     help="the config the cases ran with (their presets' bed width and window)")
     ap.add_argument("--config", default=str(ROOT / "config.yaml"), help="where metrics.counting_noise_c is read")
+    ap.add_argument("--group", nargs="+", default=["preset", "name"],
+                    help="columns whose values make a cell of seeds (the precision benchmark's: arm point)")
+    ap.add_argument("--arms", nargs="+", help="only these arms of a precision benchmark table")
     args = ap.parse_args(argv)
     config = spreadmap_config.load(args.config)
     run_config = spreadmap_config.load(args.run_config)
     cases = pd.read_csv(args.cases)
-    cells = counting_constant(cases, run_config["presets"])
+    if args.arms:
+        cases = cases[cases["arm"].isin(args.arms)]
+    group = tuple(args.group)
+    cells = counting_constant(cases, run_config["presets"], group=group)
     pd.set_option("display.width", 200)
-    show = ["preset", "name", "d_um", "h_um", "seeds", "mfr_mean", "mfr_rel_sd", "n_mfr", "c_mfr", "c_mfr_lo", "c_mfr_hi",
+    show = [*group, "d_um", "h_um", "seeds", "mfr_mean", "mfr_rel_sd", "n_mfr", "c_mfr", "c_mfr_lo", "c_mfr_hi",
             "pd_mean", "pd_rel_sd", "c_pd", "c_pd_lo", "c_pd_hi"]
     print(f"cases: {args.cases} ({len(cases)} rows, {len(cells)} cells); presets of {args.run_config}")
     print(cells[show].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
@@ -57,7 +68,7 @@ def main(argv=None) -> int:
               f"{cells[f'c_{name}'].min():.3f}-{cells[f'c_{name}'].max():.3f}")
         groups = []
         for (_, row) in cells.iterrows():
-            values = ok[(ok["preset"] == row["preset"]) & (ok["name"] == row["name"])][name]
+            values = ok[(ok[list(group)] == row[list(group)].to_numpy()).all(axis=1)][name]
             groups.append((values / row[f"{name}_mean"] - 1.0) * math.sqrt(row[f"n_{name}"]))
         stat, p = stats.bartlett(*groups)
         print(f"{name}: Bartlett test of one c in all cells: statistic {stat:.2f} on {len(groups) - 1} dof, p = {p:.3f}")

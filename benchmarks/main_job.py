@@ -10,8 +10,9 @@ results/ is never touched. ``--config KEY=VALUE ...`` is passed through to snake
 workflow's default profile; its whole output goes to main_job.log in the work directory.
 
 Printed: the date, CPU and core count; the planned jobs per rule (from a dry run); the end-to-end
-wall time; the run_case jobs started and finished; and, over the distinct cases of
-results/tables/*.csv, their count and the median and max of wall_time and cpu_time per case.
+wall time; the run_case jobs started and finished; over the distinct cases of the converge run's
+table and results/tables/*.csv, their count and the median and max of wall_time and cpu_time per
+case; and the converge run's summary (where it stopped, why, the path).
 Exits with snakemake's exit status.
 
 ``--dry-run`` only plans (snakemake -n) and prints the number of jobs per rule.
@@ -74,17 +75,18 @@ def print_plan(counts: dict[str, int]) -> None:
     print(f"run_case jobs planned: {counts.get('run_case', 0)}")
 
 
-def table_summary(tables_dir: Path) -> list[str]:
-    """Count, median and max of wall_time and cpu_time over the distinct cases of the tables."""
+def table_summary(results: Path) -> list[str]:
+    """Count, median and max of wall_time and cpu_time over the distinct cases of the tables (the
+    converge run's and results/tables/*.csv), and where the converge run stopped and why."""
     import pandas as pd
 
-    files = sorted(tables_dir.glob("*.csv"))
+    files = sorted((results / "tables").glob("*.csv")) + sorted((results / "converge").glob("table.csv"))
     if not files:
-        return [f"no results tables in {tables_dir}"]
+        return [f"no results tables in {results}"]
     frames = [pd.read_csv(f) for f in files]
     table = pd.concat([f for f in frames if "case_id" in f.columns], ignore_index=True)
     table = table.drop_duplicates("case_id")
-    lines = [f"cases in {', '.join(f.name for f in files)}: {len(table)} distinct"]
+    lines = [f"cases in {', '.join(str(f.relative_to(results)) for f in files)}: {len(table)} distinct"]
     if "status" in table.columns:
         lines.append("  by status: " + ", ".join(f"{s} {n}" for s, n in table["status"].value_counts().items()))
     for column in ("wall_time", "cpu_time"):
@@ -94,6 +96,11 @@ def table_summary(tables_dir: Path) -> list[str]:
                          f"   (n = {len(values)})")
         else:
             lines.append(f"  {column:<10} per case [s]: n/a (no values in the tables)")
+    if "cpu_time" in table.columns:
+        lines.append(f"  CPU time of the cases: {pd.to_numeric(table['cpu_time'], errors='coerce').sum() / 3600:.2f} h")
+    summary = results / "converge" / "summary.txt"
+    if summary.exists():
+        lines += ["converge run (results/converge/summary.txt):"] + ["  " + s for s in summary.read_text().splitlines()]
     return lines
 
 
@@ -175,7 +182,7 @@ def main(argv=None) -> int:
     print(f"end-to-end wall time: {elapsed:.1f} s ({elapsed / 60:.1f} min)")
     print(f"run_case jobs: {counts.get('run_case', 0)} planned, {counted['started']} started "
           f"(retries included), {counted['finished']} finished, {counted['errors']} errors")
-    for line in table_summary(workdir / "results" / "tables"):
+    for line in table_summary(workdir / "results"):
         print(line)
     print(f"results kept in {workdir / 'results'}")
     return code

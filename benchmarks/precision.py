@@ -5,8 +5,11 @@
              landed before the precision work: flat floor, fixed window);
   physics    this tree's scene with the new physics (config.yaml's scene: rough substrate) but the
              old fixed-window `default` preset (5 d bed, 6 d pile, 8 d window after a 3 d transient);
-  precision  this tree as shipped: the new physics and the `default` preset sized by its precision
-             target (target_cv), the steady-flow window and the pile sized by what passes.
+  precision  the new physics and the `default` preset sized by its precision target (target_cv) as
+             first benchmarked: the steady-flow window (>= 1 d beyond the pile, >= 4 d long), c = 0.45;
+  precision_slow_settle  the same with the old settle and relax (4 fidelity points, same seeds);
+  shipped    this tree as shipped: the window opens 3 d beyond the pile and lasts >= 8 d and until
+             (c / target_cv)^2 spheres have passed, c calibrated on the rough substrate.
 
 CV is the seed-to-seed relative SD of MFR (and PD) at a design point; CPU s the mean CPU time of
 the YADE process per case. The points are eight design points spanning the space (the corners
@@ -58,12 +61,19 @@ OLD_DEFAULT = {"width_d": 5, "heap_height_d": 10, "pile_length_min_d": 6, "heap_
                "window_d": 8, "dt_factor": 0.3, "density_scale": 1000, "target_cv": None, "steady_min_d": None}
 OLD_SETTLE = {"cloud_fraction": 0.25, "relax_time_factor": 1.5}
 FIDELITY_POINTS = ["normal", "narrow_gap_large", "small_diameter", "low_friction_fast"]
+# the precision arm as it was benchmarked (commit 65b543f^): the window opened once the flow was
+# steady (1 d beyond the pile at the earliest), lasted at least 4 d, and c was the flat floor's 0.45
+PRECISION_0 = {"presets": {"default": {"steady_min_d": 1, "window_d": 4}}, "metrics": {"counting_noise_c": 0.45}}
 ARMS = {
     "today": {"rev": "2e05ec5", "overrides": {}},
     "physics": {"rev": None, "overrides": {"presets": {"default": OLD_DEFAULT}, "scene": OLD_SETTLE}},
-    "precision": {"rev": None, "overrides": {}},
+    "precision": {"rev": None, "overrides": PRECISION_0},
     # the same-seed check that the cheaper settle and relax move neither MFR nor PD beyond the noise
-    "precision_slow_settle": {"rev": None, "overrides": {"scene": OLD_SETTLE}, "points": FIDELITY_POINTS},
+    "precision_slow_settle": {"rev": None, "overrides": {**PRECISION_0, "scene": OLD_SETTLE},
+                              "points": FIDELITY_POINTS},
+    # this tree as shipped: the window opens 3 d beyond the pile, lasts at least 8 d and until
+    # (c / target_cv)^2 spheres have passed, c calibrated on the rough substrate
+    "shipped": {"rev": None, "overrides": {}},
 }
 CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_packing",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",
@@ -258,6 +268,30 @@ def pooled_ratio(by_point: dict, arm: str, target: str, n_boot: int = 2000, seed
     return est, lo, hi, per, c_arm, c_today
 
 
+def recorded_against_seed(cells: dict, arm: str, target: str, level: float = 0.95):
+    """The case's recorded noise SD against the seed-to-seed SD, pooled over points: if each
+    point's seed variance is k x its recorded variance, sum (n-1) s^2 / r^2 ~ k chi^2(dof), so
+    recorded / seed = 1 / sqrt(k) with a chi-square interval (a 4-seed SD alone is uncertain by
+    -40 %/+90 % at 95 %, which the per-point column shows). Returns (ratio, lo, hi, dof)."""
+    from scipy import stats
+
+    num, dof = 0.0, 0
+    for d in cells.values():
+        rows = d.get(arm, [])
+        if len(rows) < 2:
+            continue
+        s = information(rows, target)
+        if not (math.isfinite(s["recorded_sd"]) and s["recorded_sd"] > 0):
+            continue
+        num += (s["n"] - 1) * (s["sd"] / s["recorded_sd"]) ** 2
+        dof += s["n"] - 1
+    if not dof:
+        return math.nan, math.nan, math.nan, 0
+    k = num / dof
+    k_lo, k_hi = num / stats.chi2.ppf((1 + level) / 2, dof), num / stats.chi2.ppf((1 - level) / 2, dof)
+    return 1 / math.sqrt(k), 1 / math.sqrt(k_hi), 1 / math.sqrt(k_lo), dof
+
+
 def report(rows: list[dict], arms: list[str]) -> str:
     ok = [r for r in rows if r["status"] == "ok" and math.isfinite(r.get("mfr", math.nan))]
     by_point: dict = {}
@@ -298,6 +332,12 @@ def report(rows: list[dict], arms: list[str]) -> str:
                 rec = s["recorded_sd"] / s["sd"] if math.isfinite(s["recorded_sd"]) else math.nan
                 lines.append(f"| {p} | {a} | {s['n']} | {s['mean']:.4f} | {s['sd']:.4f} | {s['cv']:.3f} | "
                              f"{rec:.2f} | {s['n_passed']:.0f} | {s['cpu']:.1f} | {s['info']:.3g} |")
+        lines += [""]
+        for a in arms:
+            ratio, lo, hi, dof = recorded_against_seed(complete, a, target)
+            if dof:
+                lines.append(f"- **{a}, {target.upper()}**: recorded noise SD / seed SD pooled over points "
+                             f"{ratio:.2f} (95 % interval {lo:.2f}-{hi:.2f}, {dof} dof)")
         lines += [""]
         for a in arms:
             if a == "today":

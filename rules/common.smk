@@ -160,9 +160,14 @@ def fidelity_outputs(wildcards):
     return list(rules.fidelity_analysis.output)
 
 
-def set_tables():
-    """The results tables of the main job: the sweeps and the chosen points (not the fidelity study)."""
-    return [f"results/tables/{name}.csv" for name in SETS if name not in FIDELITY_SETS]
+# The main job's cases: the converge run (LDS start, then batches), the table the surrogate and
+# the maps are trained on; and the chosen points.
+TRAINING_TABLE = "results/converge/table.csv"
+
+
+def main_tables():
+    """The results tables of the main job: the converge run's and the chosen points' (if any)."""
+    return [TRAINING_TABLE] + (["results/tables/points.csv"] if "points" in SETS else [])
 
 
 wildcard_constraints:

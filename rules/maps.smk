@@ -8,11 +8,12 @@ rule maps:
     regime overlay, and the parameter ranking (band widths and Sobol indices)."""
     input:
         model="results/surrogate/model.joblib",
-        table="results/tables/lds.csv",
+        table=TRAINING_TABLE,
     output:
         **{name: report(f"results/maps/{name}.png", caption=f"captions/{name}.rst", category="Maps")
            for name in MAP_FIGURES},
         ranking="results/maps/sensitivity_ranking_table.csv",
+        y_choice="results/maps/machine_y_choice.csv",
     params:
         maps=MAPS,
         regime=config["regime"],

@@ -1,7 +1,8 @@
 rule run_summary:
-    """What is done, failed and flagged, with reasons, per set of cases."""
+    """What is done, failed and flagged, with reasons, per set of cases: the main job's (the
+    converge run and the chosen points)."""
     input:
-        tables=lambda wc: set_tables(),
+        tables=lambda wc: main_tables(),
     output:
         json="results/summary.json",
         text="results/summary.txt",
@@ -9,6 +10,24 @@ rule run_summary:
         regime=config["regime"],
     log:
         "logs/summary.log",
+    localrule: True
+    conda:
+        "../envs/analysis.yaml"
+    script:
+        "../scripts/run_summary.py"
+
+
+rule sweeps_summary:
+    """The same for the study's sweeps (`snakemake sweeps`)."""
+    input:
+        tables=[f"results/tables/{name}.csv" for name in SWEEPS],
+    output:
+        json="results/sweeps_summary.json",
+        text="results/sweeps_summary.txt",
+    params:
+        regime=config["regime"],
+    log:
+        "logs/sweeps_summary.log",
     localrule: True
     conda:
         "../envs/analysis.yaml"

@@ -2,7 +2,7 @@ rule surrogate:
     """The noise-aware surrogate (GP and bootstrap MLP ensemble, validated by repeated k-fold against
     the noise; the map model trained on every usable case) and the study's MLP protocol beside it."""
     input:
-        table="results/tables/lds.csv",
+        table=TRAINING_TABLE,
     output:
         model="results/surrogate/model.joblib",
         metadata="results/surrogate/model.json",

@@ -18,15 +18,20 @@ model = load_model(sm.input.model)
 cases = pd.read_csv(sm.input.table)
 usable = maps.usable_cases(cases)
 y = cfg["machine"]["y"]
+auto_y, scores = maps.choose_machine_y(usable, model.targets)
+scores.to_csv(sm.output.y_choice, index=False)  # each candidate's information beyond MFR and its r with MFR
 if y == "auto":
-    y, scores = maps.choose_machine_y(usable, model.targets)
+    y = auto_y
     print(f"machine map y axis: {y}" + (f" (scores beyond MFR:\n{scores.to_string()})" if len(scores) else
                                         " (no layer-quality target in the model)"))
 elif y not in model.targets:
     raise ValueError(f"maps.machine.y: {y!r} is not a target of the surrogate ({list(model.targets)})")
+chosen = scores.set_index("target").loc[y] if y in set(scores["target"]) else None
+y_note = (None if chosen is None else f"{y} against MFR over the {int(chosen['n'])} usable cases: Pearson r = "
+          f"{chosen['r_with_mfr']:.2f} [{chosen['r_low']:.2f}, {chosen['r_high']:.2f}] (95 %)")
 machine = {k: v for k, v in cfg["machine"].items() if k != "y"}
 support = cfg["support"]
-maps.machine_map(model, out / "machine_map", y=y, ranges=p.ranges, support=support, **machine)
+maps.machine_map(model, out / "machine_map", y=y, ranges=p.ranges, support=support, y_note=y_note, **machine)
 maps.powder_band_map(model, out / "powder_band_map", y=y, ranges=p.ranges, support=support, **cfg["powder"])
 maps.powder_cluster_map(model, out / "powder_cluster_map", y=y, ranges=p.ranges, support=support, **cfg["powder"])
 maps.parallel_coordinates(cases, out / "parallel_coordinates", mfr_min=cfg["best_mfr_min"], ranges=p.ranges)

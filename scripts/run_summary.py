@@ -10,7 +10,8 @@ from spreadmap.logs import log_to
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
-tables = {Path(p).stem: pd.read_csv(p) for p in sm.input.tables}
+# a set is named by its table: results/tables/<set>.csv, or results/<set>/table.csv (the converge run)
+tables = {(Path(p).parent.name if Path(p).stem == "table" else Path(p).stem): pd.read_csv(p) for p in sm.input.tables}
 summary = run_summary(tables, sm.params.regime)
 Path(sm.output.json).write_text(json.dumps(summary, indent=1))
 text = summary_text(summary)

@@ -134,6 +134,8 @@ def preset_errors(table: pd.DataFrame, reference: str) -> tuple[pd.DataFrame, pd
                     "n_particles_median": cases["n_particles"].median(),
                     "flagged_cases": int(flagged(cases).sum()),
                     "peak_overlap_max": cases["peak_overlap_ratio"].max()})
+        if "n_passed" in cases and cases["n_passed"].notna().any():  # windows sized by a precision target
+            row["n_passed_median"] = cases["n_passed"].median()
         rows.append(row)
     return per_point, pd.DataFrame(rows)
 
@@ -199,12 +201,15 @@ def markdown_summary(presets: pd.DataFrame, per_point: pd.DataFrame, knobs: pd.D
              "|error| is below 2 standard errors of the difference of the seed means. Seed spread: mean over "
              "the points of the seed-to-seed coefficient of variation. Cost: CPU time of one YADE process "
              "(one core); \"cost vs reference\": the reference's total CPU time over the preset's.", "",
-             "| preset | spheres (median) | CPU per case, median / max | wall per case, median | cost vs reference "
-             "| particle-steps/s | MFR error | PD error | seed spread MFR / PD | usable cases | peak overlap (max) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| preset | spheres (median) | N passed (median) | CPU per case, median / max | wall per case, median "
+             "| cost vs reference | particle-steps/s | MFR error | PD error | seed spread MFR / PD | usable cases "
+             "| peak overlap (max) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for _, r in presets.iterrows():
         cost = "1 (reference)" if r["preset"] == reference else f"{r['cost_ratio_to_reference']:.1f}x cheaper"
-        lines.append(f"| {r['preset']} | {r['n_particles_median']:.0f} | {r['cpu_s_median']:.1f} s / {r['cpu_s_max']:.0f} s "
+        n_passed = f"{r['n_passed_median']:.0f}" if pd.notna(r.get("n_passed_median")) else "-"
+        lines.append(f"| {r['preset']} | {r['n_particles_median']:.0f} | {n_passed} "
+                     f"| {r['cpu_s_median']:.1f} s / {r['cpu_s_max']:.0f} s "
                      f"| {r['wall_s_median']:.1f} s | {cost} "
                      f"| {r['particle_steps_per_s']:.2e} | {r['mfr_verdict']} | {r['pd_verdict']} "
                      f"| {_pct(r['mfr_seed_cv'])} / {_pct(r['pd_seed_cv'])} | {r['usable_cases']}/{r['cases']} "

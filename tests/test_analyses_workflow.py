@@ -21,16 +21,19 @@ SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
     "maps": {"sobol_n": 128, "machine": {"n_h": 3, "n_v": 3}},
     "converge": {"start": 4, "batch": 2, "k_consecutive": 3, "budget": 8},
 })
-REPORT_FIGURES = ["distributions", "statistics", "sampling_study", "surrogate_parity", "surrogate_r2_vs_neurons",
-                  "surrogate_learning_curve", "machine_map", "powder_band_map", "powder_cluster_map",
-                  "parallel_coordinates", "regime_overlay", "sensitivity_ranking", "demo"]
+MAIN_FIGURES = ["path", "surrogate_parity", "surrogate_r2_vs_neurons", "surrogate_learning_curve", "machine_map",
+                "powder_band_map", "powder_cluster_map", "parallel_coordinates", "regime_overlay",
+                "sensitivity_ranking", "demo"]
+STUDY_FIGURES = ["distributions", "statistics", "sampling_study"]
 
 
 @pytest.fixture(scope="module")
 def finished_run(tmp_path_factory):
     wf = make_workflow(tmp_path_factory.mktemp("analyses"), SMALL_RUN, drop=("sweeps", "points"))
-    run = snakemake(wf, timeout=900)
+    run = snakemake(wf, timeout=900)  # the main job: the converge run, its surrogate and maps
     assert run.returncode == 0, (run.stdout + run.stderr)[-5000:]
+    sweeps = snakemake(wf, "sweeps", "sampling", timeout=900)  # the study's protocol beside it
+    assert sweeps.returncode == 0, (sweeps.stdout + sweeps.stderr)[-5000:]
     return wf
 
 
@@ -43,11 +46,15 @@ def test_main_job_writes_every_analysis_output(finished_run):
             assert (wf / f"{stem}.{ext}").stat().st_size > 0, f"{stem}.{ext}"
     summary = json.loads((wf / "convergence" / "summary.json").read_text())
     assert {"lds", "lattice"} <= set(summary["sweeps"])
+    # the main job's summary covers the converge run and the chosen points; the sweeps have their own
+    assert set(json.loads((wf / "summary.json").read_text())["sets"]) == {"converge", "points"}
+    assert set(json.loads((wf / "sweeps_summary.json").read_text())["sets"]) == {"lds", "lattice"}
     ranking = (wf / "maps" / "sensitivity_ranking_table.csv").read_text()
     assert all(name in ranking for name in ("f", "d_um", "h_um", "v_mm_s"))
     # the model says which table it was trained on, by content: the file's SHA-256
     meta = json.loads((wf / "surrogate" / "model.json").read_text())
     source = finished_run / meta["source_path"]
+    assert meta["source_path"].endswith("converge/table.csv")  # trained on the main job's converge run
     assert meta["source_sha256"] == hashlib.sha256(source.read_bytes()).hexdigest()
     assert meta["n_train"] + meta["n_test"] == meta["n_usable"] > 0
     predictions = (wf / "surrogate" / "predictions.csv").read_text()
@@ -62,16 +69,24 @@ def test_vtk_written_when_asked(finished_run):
 
 
 def test_report_contains_every_figure(finished_run):
+    """The main job's report has its own figures; asked for with the study's targets, theirs too."""
     run = snakemake(finished_run, "--report", "report.html", timeout=600)
     assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
     html = (finished_run / "report.html").read_text(errors="replace")
-    for name in REPORT_FIGURES:
+    for name in MAIN_FIGURES:
+        assert re.search(rf"{name}\.png", html), f"{name}.png missing from the report"
+    assert not re.search(r"distributions\.png", html)  # a sweeps figure: not the main job's
+    run = snakemake(finished_run, "--report", "everything.html", "all", "sweeps", "sampling", timeout=600)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    html = (finished_run / "everything.html").read_text(errors="replace")
+    for name in MAIN_FIGURES + STUDY_FIGURES:
         assert re.search(rf"{name}\.png", html), f"{name}.png missing from the report"
 
 
 def test_converge_stops_at_the_budget_when_the_criterion_never_holds(finished_run):
-    run = snakemake(finished_run, "converge", timeout=600)
-    assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
+    # the main job ran the converge loop: asking for it again runs nothing
+    dry = snakemake(finished_run, "converge", "-n")
+    assert dry.returncode == 0 and "run_case" not in planned_jobs(dry.stdout), dry.stdout[-3000:]
     stopped = json.loads((finished_run / "results" / "converge" / "stopped.json").read_text())
     # 4, then 6, then 8 smoke cases: too few, or too noisy, for the map criteria; the run ends on its budget
     assert stopped["reason"] == "case budget" and stopped["n"] == 8

@@ -69,7 +69,8 @@ def test_a_knob_preset_changes_only_what_its_knob_drives(shipped):
     assert wide["pile_length"] < base["pile_length"]
     assert base["n_particles"] < wide["n_particles"] < 1.25 * base["n_particles"]
     precise = scene_parameters(point, "default_target_cv_0p015", cfg, "x")
-    assert precise["target_passed"] == math.ceil((0.45 / 0.015) ** 2)  # (c / cv)^2 spheres, c = 0.45
+    c = cfg["metrics"]["counting_noise_c"]
+    assert precise["target_passed"] == math.ceil((c / 0.015) ** 2) == 609  # (c / cv)^2 spheres, c = 0.37
     heavy = scene_parameters(point, "default_density_scale_100", cfg, "x")
     assert heavy["time_step"] == pytest.approx(base["time_step"] / math.sqrt(10))
 

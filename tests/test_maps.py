@@ -153,7 +153,13 @@ def test_machine_y_is_the_layer_measure_with_most_beyond_mfr():
     df["layer_packing"] = 0.9 * df["mfr"] + rng.normal(0, 0.005, 40)      # MFR again
     df["coverage"] = rng.uniform(0.6, 1.0, 40)                             # something else
     y, scores = maps.choose_machine_y(df, ["mfr", "pd", "layer_packing", "coverage"])
-    assert y == "coverage" and len(scores) == 2
+    assert y == "coverage" and list(scores["target"]) == ["layer_packing", "coverage", "pd"]
+    # the reported correlation with MFR is scipy's Pearson r, recomputed here with numpy
+    r = scores.set_index("target")["r_with_mfr"]
+    assert r["layer_packing"] == pytest.approx(np.corrcoef(df["mfr"], df["layer_packing"])[0, 1], abs=1e-12)
+    assert r["layer_packing"] > 0.9 and abs(r["coverage"]) < 0.4
+    low, high = scores.set_index("target").loc["coverage", ["r_low", "r_high"]]
+    assert low < r["coverage"] < high
     assert maps.choose_machine_y(df, ["mfr", "pd"])[0] == "pd"
 
 

@@ -1,7 +1,7 @@
-"""The fidelity study published in docs/fidelity/ (the README's numbers) is the study its own
-config (docs/fidelity/config.yaml, the configuration it ran with: the study's flat floor and fixed
-window, before the precision scene) plans, and its tables are what the package computes from its
-published cases."""
+"""Each published fidelity study (docs/fidelity/: the default scene; docs/fidelity_flat/: the
+study's flat floor and fixed window, before the precision scene) is the study its own config (its
+config.yaml, the configuration it ran with) plans, and its tables are what the package computes
+from its published cases."""
 import copy
 
 import numpy as np
@@ -14,17 +14,18 @@ from spreadmap import fidelity_plan as plan
 from spreadmap import fidelity_study as study
 from spreadmap.cases import case_id
 
-DOCS = ROOT / "docs" / "fidelity"
+STUDIES = [d for d in (ROOT / "docs" / "fidelity", ROOT / "docs" / "fidelity_flat") if (d / "config.yaml").exists()]
 
 
-@pytest.fixture(scope="module")
-def shipped():
-    cfg = spreadmap_config.load(DOCS / "config.yaml")
+@pytest.fixture(scope="module", params=STUDIES, ids=[d.name for d in STUDIES])
+def published(request):
+    cfg = spreadmap_config.load(request.param / "config.yaml")
     cfg["presets"].update(plan.knob_presets(copy.deepcopy(cfg)))
-    return cfg
+    return request.param, cfg
 
 
-def test_published_cases_are_the_planned_cases(shipped):
+def test_published_cases_are_the_planned_cases(published):
+    DOCS, shipped = published
     cases = pd.read_csv(DOCS / "cases_presets.csv")
     planned = [case_id(r["point"], r["preset"], r["seed"]) for r in plan.preset_cases(shipped)]
     assert list(cases["case_id"]) == planned
@@ -44,7 +45,8 @@ def _same(published: pd.DataFrame, computed: pd.DataFrame):
             assert published[column].astype(str).tolist() == computed[column].astype(str).tolist(), column
 
 
-def test_published_tables_are_recomputed_from_the_published_cases(shipped):
+def test_published_tables_are_recomputed_from_the_published_cases(published):
+    DOCS, shipped = published
     per_point, presets = study.preset_errors(pd.read_csv(DOCS / "cases_presets.csv"), shipped["fidelity"]["reference"])
     _same(pd.read_csv(DOCS / "presets.csv"), presets)
     _same(pd.read_csv(DOCS / "per_point.csv"), per_point)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from ..design import NAMES, bounds
 from ..surrogate.settings import LAYER_TARGETS
@@ -93,8 +94,10 @@ def choose_machine_y(cases: pd.DataFrame, targets) -> tuple[str, pd.DataFrame]:
     """The machine map's y axis: of the layer-quality targets present, the one carrying most
     information beyond MFR, else PD. Score: the variance of the target left after a straight-line
     fit on MFR, over its noise variance where the table gives ``<t>_sd`` (signal beyond MFR against
-    noise), else the unexplained share 1 - r^2."""
-    cands = [t for t in LAYER_TARGETS if t in targets and t in cases]
+    noise), else the unexplained share 1 - r^2. The table gives each candidate's Pearson r with
+    MFR across the cases and its 95 % interval (scipy), so the map can say how far y is from MFR
+    in disguise. ``targets``: the candidates (PD is scored too when given, for comparison)."""
+    cands = [t for t in (*LAYER_TARGETS, "pd") if t in targets and t in cases]
     rows = []
     for t in cands:
         ok = np.isfinite(cases[t].to_numpy(float)) & np.isfinite(cases["mfr"].to_numpy(float))
@@ -102,13 +105,17 @@ def choose_machine_y(cases: pd.DataFrame, targets) -> tuple[str, pd.DataFrame]:
         if len(y) < 3 or np.ptp(x) == 0:
             continue
         resid = y - np.polyval(np.polyfit(x, y, 1), x)
+        pearson = stats.pearsonr(x, y)
+        ci = pearson.confidence_interval(0.95) if len(y) > 3 else (np.nan, np.nan)
         sd_col = f"{t}_sd"
         if sd_col in cases and np.isfinite(cases.loc[ok, sd_col].to_numpy(float)).all():
             score, how = resid.var(ddof=2) / np.mean(cases.loc[ok, sd_col].to_numpy(float) ** 2), "residual / noise variance"
         else:
             score, how = resid.var(ddof=2) / y.var(ddof=1), "1 - r^2"
-        rows.append({"target": t, "score": float(score), "how": how, "n": int(ok.sum())})
-    table = pd.DataFrame(rows, columns=["target", "score", "how", "n"])
-    if table.empty:
+        rows.append({"target": t, "score": float(score), "how": how, "n": int(ok.sum()),
+                     "r_with_mfr": float(pearson.statistic), "r_low": float(ci[0]), "r_high": float(ci[1])})
+    table = pd.DataFrame(rows, columns=["target", "score", "how", "n", "r_with_mfr", "r_low", "r_high"])
+    layer = table[table["target"] != "pd"]
+    if layer.empty:
         return "pd", table
-    return str(table.loc[table["score"].idxmax(), "target"]), table
+    return str(layer.loc[layer["score"].idxmax(), "target"]), table

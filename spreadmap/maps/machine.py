@@ -23,15 +23,16 @@ from .style import HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_not
 
 
 def machine_map(model, stem, y: str = "pd", f: float = 0.45, d_um: float = 45.0, n_h: int = 5, n_v: int = 5,
-                h_values=None, v_values=None, ranges=None, support=None, max_labels: int = 7) -> MapResult:
+                h_values=None, v_values=None, ranges=None, support=None, max_labels: int = 7,
+                y_note: str | None = None) -> MapResult:
     support = support or {"max_distance": 1.5, "max_sd_ratio": 1.0}
     h = grids.values(h_values, n_h, "h_um", ranges)
     v = grids.values(v_values, n_v, "v_mm_s", ranges)
     grid = grids.evaluate(model, grids.grid_frame(f=f, d_um=d_um, h_um=h, v_mm_s=v), ["mfr", y], support)
-    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels)
+    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note)
 
 
-def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7) -> MapResult:
+def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note=None) -> MapResult:
     shape = (len(h), len(v))
     X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
     sx, sy = grid["mfr_model_sd"].to_numpy().reshape(shape), grid[f"{y}_model_sd"].to_numpy().reshape(shape)
@@ -86,6 +87,8 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7) -> Map
     ax.legend(handles=handles, loc="lower right", fontsize=7.5, framealpha=0.9)
     ax.set_xlabel(LABELS["mfr"])
     ax.set_ylabel(LABELS.get(y, y))
+    if y_note:  # how far y is from MFR in disguise, across the sample
+        ax.text(0.01, 0.01, y_note, transform=ax.transAxes, fontsize=7, va="bottom", ha="left", color="0.25")
     ax.grid(alpha=0.3)
     beyond = "" if ok.any() else "BEYOND THE DATA: "
     title = ax.set_title(f"{beyond}Machine map at f = {fmt(f)}, d = {fmt(d_um)} um: h {fmt(h.min())}-{fmt(h.max())} um, "

@@ -54,20 +54,26 @@ def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name
     PD, N = spheres' worth of volume passed (MFR x h x W x window travel / sphere volume, W and the
     window from the preset, in d) and c = relative SD x sqrt(N), with a `level` confidence interval
     from the chi-square law of the sample variance (normal seeds). Rows not `ok` or flagged are
-    left out. For PD the box is the window (the published study's): N_pd = PD x h x W x window / v."""
+    left out. For PD the box is the window (the published study's): N_pd = PD x h x W x window / v.
+    A table with the cases' own count (`n_passed`, windows sized by a precision target) uses the
+    cell's mean count as N for both (the deposit holds what passed), and needs no presets."""
     ok = cases[(cases["status"] == "ok") & ~cases.get("flagged", pd.Series(False, index=cases.index)).fillna(False).astype(bool)]
     rows = []
     for key, cell in ok.groupby(list(group)):
         key = dict(zip(group, key if isinstance(key, tuple) else (key,)))
-        preset = presets[key["preset"]] if "preset" in key else presets[cell["preset"].iloc[0]]
+        if len(cell) < 2:  # one seed says nothing of the spread
+            continue
         d, h = cell["d_um"].iloc[0], cell["h_um"].iloc[0]
-        spheres_per_fraction = h * preset["width_d"] * d * preset["window_d"] * d / (math.pi * d ** 3 / 6.0)
+        counted = "n_passed" in cell and bool(cell["n_passed"].notna().all())
+        if not counted:
+            preset = presets[key["preset"]] if "preset" in key else presets[cell["preset"].iloc[0]]
+            spheres_per_fraction = h * preset["width_d"] * d * preset["window_d"] * d / (math.pi * d ** 3 / 6.0)
         row = {**key, "f": cell["f"].iloc[0], "d_um": d, "h_um": h, "v_mm_s": cell["v_mm_s"].iloc[0], "seeds": len(cell)}
         dof = len(cell) - 1
         lo_q, hi_q = stats.chi2.ppf([(1 + level) / 2, (1 - level) / 2], dof) if dof > 0 else (math.nan, math.nan)
         for name in ("mfr", "pd"):
             mean, sd = cell[name].mean(), cell[name].std(ddof=1)
-            n = mean * spheres_per_fraction
+            n = float(cell["n_passed"].mean()) if counted else mean * spheres_per_fraction
             c = sd / mean * math.sqrt(n)
             row.update({f"{name}_mean": mean, f"{name}_sd": sd, f"{name}_rel_sd": sd / mean, f"n_{name}": n,
                         f"c_{name}": c, f"c_{name}_lo": c * math.sqrt(dof / lo_q), f"c_{name}_hi": c * math.sqrt(dof / hi_q)})

@@ -134,7 +134,9 @@ def learning_curve(rows: TrainingRows, targets, chosen: dict, cfg: dict, notes: 
     frame = rows.frame
     if not cfg["learning_curve"] or "index" not in frame:
         return pd.DataFrame(columns=cols)
-    in_lds = (frame["sweep"].astype(str) == "lds").to_numpy() if "sweep" in frame else np.ones(len(frame), bool)
+    # prefixes of a sequence: the LDS sweep, or the converge run in run order
+    in_lds = (frame["sweep"].astype(str).isin(["lds", "converge"]).to_numpy() if "sweep" in frame
+              else np.ones(len(frame), bool))
     index = pd.to_numeric(frame["index"], errors="coerce").to_numpy(float)
     n_total = int(in_lds.sum())
     sizes = sorted({s for s in (n_total // 4, n_total // 2, n_total) if s >= _min_cases(cfg)})
