@@ -74,10 +74,15 @@ ARMS = {
     # this tree as shipped: the window opens 3 d beyond the pile, lasts at least 8 d and until
     # (c / target_cv)^2 spheres have passed, c calibrated on the rough substrate
     "shipped": {"rev": None, "overrides": {}},
+    # the pile's standing reserve (scene.pile_reserve_h, in gap heights), tried where the shipped
+    # arm's pile ran down within the window (h/d >= 3)
+    # (tried as a heap h or 2 h long; shipped as an area pile_reserve x h^2, which gives 2 h at the corner)
+    "reserve_1h": {"rev": None, "overrides": {"scene": {"pile_reserve": 2.33}}, "points": ["fine_thick_corner"]},
+    "reserve_2h": {"rev": None, "overrides": {"scene": {"pile_reserve": 4.67}}, "points": ["fine_thick_corner"]},
 }
 CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_packing",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",
-                "peak_overlap_relax", "peak_overlap_move", "rolled_off_particles", "flagged"]
+                "peak_overlap_relax", "peak_overlap_move", "rolled_off_particles", "flow_trend", "flow_trend_z", "flagged"]
 CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", "cpu_time", "wall_time",
                *CASE_COLUMNS, "case_dir"]
 

@@ -101,6 +101,11 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         need *= heap / (h + heap)  # the whole pile, not only its heap above the gap, is the reserve
         window_cap = max(window, preset["window_max_d"] * d)
         window_expected = min(window_cap, max(window, target * sphere_volume / (scene["mfr_expected"] * h * width)))
+        # ... plus a standing heap that is never meant to pass: the flow under the blade stays
+        # steady only while the heap ahead of it is tall against the gap, a wedge at the angle of
+        # repose whose area grows as h^2 (docs/precision: a pile of what passes x 1.5 at h/d = 7.5
+        # fed a flow that fell from 0.5 to 0.1 within the window). Its area is pile_reserve x h^2.
+        need += scene.get("pile_reserve", 0.0) * h * h * packing * heap / (h + heap)
     pile_length = max(preset["pile_length_min_d"] * d, need / (packing * heap))
     pile_height = h + heap
     n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))

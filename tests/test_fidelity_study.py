@@ -64,10 +64,16 @@ def test_a_knob_preset_changes_only_what_its_knob_drives(shipped):
     assert dt["n_particles"] == base["n_particles"]
     wide = scene_parameters(point, "default_width_d_16", cfg, "x")
     assert wide["width"] == pytest.approx(16 / 10 * base["width"])
-    # the pile holds what must pass: a wider bed makes it shorter; only what passes in the transient
-    # grows with the width (a pile of fixed length would hold 16/10 as many spheres)
+    # the pile holds what must pass: a wider bed makes it shorter (the window's spheres spread over
+    # the width); what passes in the transient and the standing reserve (scene.pile_reserve x h^2
+    # per unit width) do not shrink: a pile of fixed length would hold 16/10 as many spheres
     assert wide["pile_length"] < base["pile_length"]
-    assert base["n_particles"] < wide["n_particles"] < 1.25 * base["n_particles"]
+    assert base["n_particles"] < wide["n_particles"] < 16 / 10 * base["n_particles"]
+    reserve = cfg["scene"]["pile_reserve"] * point["h_um"] ** 2 / (point["h_um"] + 10 * point["d_um"]) * 1e-6
+    no_reserve = copy.deepcopy(cfg)
+    no_reserve["scene"]["pile_reserve"] = 0.0
+    assert base["pile_length"] - scene_parameters(point, "default", no_reserve, "x")["pile_length"] == \
+        pytest.approx(reserve, rel=1e-9)  # 4.7 h^2 / (h + heap): 1.8 d at this point
     precise = scene_parameters(point, "default_target_cv_0p015", cfg, "x")
     c = cfg["metrics"]["counting_noise_c"]
     assert precise["target_passed"] == math.ceil((c / 0.015) ** 2) == 609  # (c / cv)^2 spheres, c = 0.37

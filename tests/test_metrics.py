@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from spreadmap.metrics import (NEW_COLUMNS, PHASES, batch_means_sd, case_metrics, classify, counting_constant,
+from spreadmap.metrics import (NEW_COLUMNS, PHASES, batch_means_sd, case_metrics, classify, counting_constant, flow_trend,
                                counting_sd, layer_density, mass_flow_ratio, measured_span, passed_volume,
                                pooled_constant)
 
@@ -381,3 +381,49 @@ def test_regime_probabilities_against_monte_carlo_and_the_plain_rule():
     expected = classify(*mean, RULES)
     for name in ("normal", "jamming", "short_feed"):
         np.testing.assert_array_equal(plain[name], (expected == name).astype(float))
+
+
+def test_flow_trend_of_a_known_series():
+    """Volume passed V(x) = a x + b x^2 (a flow rising linearly with travel): the halves of [x0, x1]
+    pass V(xm) - V(x0) and V(x1) - V(xm), worked here by hand; a steady flow gives 0."""
+    x = np.linspace(0.0, 30.0, 301)
+    a, b, x0, x1 = 2.0, -0.02, 10.0, 20.0
+    series = np.column_stack([x, x, a * x + b * x ** 2])
+    first = a * 5 + b * (15 ** 2 - 10 ** 2)   # 10 - 2.5 = 7.5
+    second = a * 5 + b * (20 ** 2 - 15 ** 2)  # 10 - 3.5 = 6.5
+    assert flow_trend(series.tolist(), x0, x1, 1.0, 1.0) == pytest.approx((second - first) / ((first + second) / 2))
+    assert flow_trend(series.tolist(), x0, x1, 1.0, 1.0) == pytest.approx(-1.0 / 7.0)
+    steady = np.column_stack([x, x, 3.0 * x])
+    assert flow_trend(steady.tolist(), x0, x1, 1.0, 1.0) == pytest.approx(0.0, abs=1e-12)
+    assert math.isnan(flow_trend(series.tolist(), x0, 40.0, 1.0, 1.0))  # the series ends before the window
+
+
+def test_flow_trend_z_is_standard_normal_for_a_steady_poisson_flow():
+    """Spheres crossing as a Poisson process (c = 1): the trend over its SE 2c / sqrt(N) has mean
+    0 and SD 1 over 400 windows (within 4 SE of each), so a steady case is flagged at z < -3 in
+    ~0.1 % of runs."""
+    rng = np.random.default_rng(3)
+    z = []
+    for _ in range(400):
+        s = poisson_series(rng, 20.0, 9.0, 20.0, 0.05)
+        t = flow_trend(s.tolist(), 10.0, 20.0, 1.0, 1.0)
+        n = np.interp(20.0, s[:, 1], s[:, 2]) - np.interp(10.0, s[:, 1], s[:, 2])
+        z.append(t / (2.0 / math.sqrt(n)))
+    assert abs(np.mean(z)) < 4 / math.sqrt(400) and abs(np.std(z) - 1.0) < 4 * 0.71 / math.sqrt(400) * 1.0
+    assert np.mean(np.array(z) < -3) < 0.01
+
+
+def test_a_pile_that_runs_down_flags_the_case():
+    """The flow in the window's second half a third of the first's: a trend of -1, ~7 SEs with
+    the record's 40 spheres passed: flagged, with the trend."""
+    raw = raw_record(layers=1)
+    x = np.linspace(9.0, 20.0, 111) * DIAM
+    rate = np.where(x < 15 * DIAM, 1.5, 0.5)  # volume per unit travel, in the window's halves
+    vol = np.concatenate([[0.0], np.cumsum(rate[:-1] * np.diff(x))]) * 1e-10
+    raw["behind_series"] = np.column_stack([x, x, vol]).tolist()
+    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    assert m["flow_trend"] == pytest.approx(-1.0, rel=0.02)
+    assert m["flow_trend_z"] == pytest.approx(-1.0 / (2 * 0.45 / math.sqrt(m["n_passed"])), rel=0.02)
+    assert m["flagged"] and "the pile ran down" in m["flag_reason"]
+    steady = dict(BOUNDS, max_flow_decline_z=None)  # null: never flagged for it
+    assert not case_metrics(raw, RULES, steady, SETTINGS)["flagged"]

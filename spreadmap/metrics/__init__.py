@@ -9,10 +9,10 @@ case    case_metrics: all of it plus the diagnostics and the stability flags
 from .case import NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure, powder
 from .flow import layer_density, mass_flow_ratio, measured_span, passed_volume, sphere_volume, window_passed_volume
 from .layer import layer_quality, upper_envelope
-from .noise import batch_means_sd, counting_constant, counting_sd, pooled_constant
+from .noise import batch_means_sd, counting_constant, counting_sd, flow_trend, pooled_constant
 from .regime import REGIMES, RULE_KEYS, classify, regime_probabilities
 
 __all__ = ["NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "batch_means_sd", "case_metrics", "classify",
-           "counting_constant", "counting_sd", "layer_density", "layer_quality", "mass_flow_ratio", "measure",
+           "counting_constant", "counting_sd", "flow_trend", "layer_density", "layer_quality", "mass_flow_ratio", "measure",
            "measured_span", "passed_volume", "pooled_constant", "powder", "regime_probabilities", "sphere_volume", "upper_envelope",
            "window_passed_volume"]

@@ -10,14 +10,14 @@ import numpy as np
 from ..scene import DENSEST_PACKING
 from .flow import layer_density, mass_flow_ratio, measured_span, sphere_volume, window_passed_volume
 from .layer import layer_quality
-from .noise import batch_means_sd, counting_sd
+from .noise import batch_means_sd, counting_sd, flow_trend
 from .regime import classify
 
 PHASES = ("settle", "relax", "move")  # the phases of the scene, in order (yade_scripts/spreading_case.py)
 
 # columns added by the layer / precision work (issues 13, 14), after every older column
 NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_packing", "coverage",
-               "roughness_d", "thickness_ratio")
+               "roughness_d", "thickness_ratio", "flow_trend", "flow_trend_z")
 SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batches", "surface_grid_d")
 
 
@@ -59,6 +59,10 @@ def measure(raw: dict, settings: dict) -> dict:
     out["pd_sd"] = counting_sd(out["n_pd"], v_sphere / ((x1 - x0) * width * gap), c)
     out["mfr_sd_within"] = batch_means_sd(raw.get("behind_series", []), s1["blade_rear_x"], s2["blade_rear_x"],
                                           gap, width, settings["within_batches"])[0]
+    # is the flow steady over the window? (second half - first) / mean, in counting-noise SEs
+    out["flow_trend"] = flow_trend(raw.get("behind_series", []), s1["blade_rear_x"], s2["blade_rear_x"], gap, width)
+    se = 2.0 * c / math.sqrt(out["n_passed"]) if out["n_passed"] > 0 else math.nan
+    out["flow_trend_z"] = out["flow_trend"] / se if se and math.isfinite(se) else math.nan
     layer = layer_quality(s2["positions"], s2["radii"], x0, x1, width, settings["surface_grid_d"] * d)
     out["layer_packing"] = layer["layer_packing"]
     out["coverage"] = layer["coverage"]
@@ -116,6 +120,10 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         flags.append(f"time step {out['time_step_ratio']:.2f} x critical")
     if out["peak_overlap_ratio"] > stability["max_overlap_ratio"]:
         flags.append(f"peak overlap {out['peak_overlap_ratio']:.3g} R > {stability['max_overlap_ratio']} R")
+    z_max = stability.get("max_flow_decline_z", 3.0)
+    if z_max is not None and new["flow_trend_z"] < -z_max:  # nan (no series) compares False
+        flags.append(f"flow fell by {-new['flow_trend']:.0%} over the window ({new['flow_trend_z']:.1f} SE): "
+                     f"the pile ran down")
     if out["escaped_particles"] > stability["max_escaped"]:
         flags.append(f"{out['escaped_particles']} spheres escaped the box")
     out["flagged"] = bool(flags)

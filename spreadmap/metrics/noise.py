@@ -49,6 +49,23 @@ def batch_means_sd(series, x0: float, x1: float, gap: float, width: float, batch
     return float(np.std(flows, ddof=1) / math.sqrt(b)), b
 
 
+def flow_trend(series, x0: float, x1: float, gap: float, width: float) -> float:
+    """Relative change of the flow under the blade between the window's halves, (second -
+    first) / mean, from the series of [time, blade_rear_x, volume passed] (linear between its
+    points). A steady flow gives 0 within counting noise, whose SD here is 2c / sqrt(N) for N
+    spheres passed in the window (each half holds N/2); a pile that runs down gives a negative
+    trend. nan when the series does not cover the window."""
+    arr = np.asarray(series, float).reshape(-1, 3) if len(series) else np.zeros((0, 3))
+    x, vol = arr[:, 1], arr[:, 2]
+    if len(x) < 3 or x1 <= x0 or x[0] > x0 or x[-1] < x1 or np.any(np.diff(x) < 0):
+        return math.nan
+    v0, vm, v1 = np.interp([x0, 0.5 * (x0 + x1), x1], x, vol)
+    first, second = vm - v0, v1 - vm
+    if first + second <= 0:
+        return math.nan
+    return float((second - first) / (0.5 * (first + second)))
+
+
 def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name"), level: float = 0.9) -> pd.DataFrame:
     """Per cell of seeds (default: preset x point name): mean, seed SD and relative SD of MFR and
     PD, N = spheres' worth of volume passed (MFR x h x W x window travel / sphere volume, W and the
