@@ -7,7 +7,7 @@ scene (rough substrate, windows sized by a precision target) is checked on the p
 benchmark's rough-substrate arms, whose cases record their own count N:
 
     .venv/bin/python benchmarks/counting_noise.py --cases docs/precision/cases.csv --group arm point \
-        --arms physics precision precision_slow_settle shipped
+        --arms physics precision precision_slow_settle window8 shipped
 
 Per cell: seed SD of MFR and PD, N = MFR x h x W x window / sphere volume (W and the window from
 the preset of the config the cases ran with, `--run-config`, default docs/fidelity_flat/config.yaml;

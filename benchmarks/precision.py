@@ -8,8 +8,9 @@
   precision  the new physics and the `default` preset sized by its precision target (target_cv) as
              first benchmarked: the steady-flow window (>= 1 d beyond the pile, >= 4 d long), c = 0.45;
   precision_slow_settle  the same with the old settle and relax (4 fidelity points, same seeds);
-  shipped    this tree as shipped: the window opens 3 d beyond the pile and lasts >= 8 d and until
-             (c / target_cv)^2 spheres have passed, c calibrated on the rough substrate.
+  window8    the window opens 3 d beyond the pile and lasts >= 8 d and until (c / target_cv)^2
+             spheres have passed, c calibrated on the rough substrate; no standing reserve;
+  shipped    this tree as shipped: window8 with the pile's standing reserve (scene.pile_reserve).
 
 CV is the seed-to-seed relative SD of MFR (and PD) at a design point; CPU s the mean CPU time of
 the YADE process per case. The points are eight design points spanning the space (the corners
@@ -71,8 +72,11 @@ ARMS = {
     # the same-seed check that the cheaper settle and relax move neither MFR nor PD beyond the noise
     "precision_slow_settle": {"rev": None, "overrides": {**PRECISION_0, "scene": OLD_SETTLE},
                               "points": FIDELITY_POINTS},
-    # this tree as shipped: the window opens 3 d beyond the pile, lasts at least 8 d and until
-    # (c / target_cv)^2 spheres have passed, c calibrated on the rough substrate
+    # the window opens 3 d beyond the pile, lasts at least 8 d and until (c / target_cv)^2 spheres
+    # have passed, c calibrated on the rough substrate; the pile without its standing reserve (run
+    # 2026-12-01: it ran down at h/d >= 3)
+    "window8": {"rev": None, "overrides": {"scene": {"pile_reserve": 0.0}}},
+    # this tree as shipped: window8 with the pile's standing reserve (scene.pile_reserve)
     "shipped": {"rev": None, "overrides": {}},
     # the pile's standing reserve (scene.pile_reserve_h, in gap heights), tried where the shipped
     # arm's pile ran down within the window (h/d >= 3)

@@ -112,7 +112,7 @@ def test_counting_noise_of_the_default_scene_on_the_published_precision_cases():
     """The configured noise constant lies inside the pooled interval that the published seeds of
     the default scene (the precision benchmark's rough-substrate arms, each case's own count N) give."""
     r = run("counting_noise.py", "--cases", ROOT / "docs" / "precision" / "cases.csv", "--group", "arm", "point",
-            "--arms", "physics", "precision", "precision_slow_settle", "shipped", timeout=120)
+            "--arms", "physics", "precision", "precision_slow_settle", "window8", "shipped", timeout=120)
     assert r.returncode == 0, (r.stdout + r.stderr)[-4000:]
     configured = float(re.search(r"configured c \(metrics.counting_noise_c\): (\S+)", r.stdout).group(1))
     est, lo, hi = pooled_c(r.stdout)
