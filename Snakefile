@@ -48,7 +48,7 @@ rule all:
 
 rule sweeps:
     """The study's protocol: the fixed LDS and lattice sweeps and the five statistics per partition
-    (the study's convergence rule)."""
+    (the study's convergence rule); the summary covers them and the chosen points."""
     input:
         [f"results/samples/{name}.csv" for name in SWEEPS],
         [f"results/tables/{name}.csv" for name in SWEEPS],

@@ -18,9 +18,9 @@ rule run_summary:
 
 
 rule sweeps_summary:
-    """The same for the study's sweeps (`snakemake sweeps`)."""
+    """The same for the fixed sets (`snakemake sweeps`): the study's sweeps and the chosen points."""
     input:
-        tables=[f"results/tables/{name}.csv" for name in SWEEPS],
+        tables=[f"results/tables/{name}.csv" for name in SWEEPS] + (["results/tables/points.csv"] if "points" in SETS else []),
     output:
         json="results/sweeps_summary.json",
         text="results/sweeps_summary.txt",

@@ -67,10 +67,10 @@ def test_a_failed_case_is_recorded_with_its_reason_and_the_others_finish(tmp_pat
     assert bool(points.loc[0, "flagged"])
     lds = pd.read_csv(wf / "results" / "tables" / "lds.csv")
     assert len(lds) == 3 and (lds["status"] == "ok").all()
-    summary = json.loads((wf / "results" / "summary.json").read_text())
+    summary = json.loads((wf / "results" / "sweeps_summary.json").read_text())
     assert summary["sets"]["points"]["failed"] == 1 and summary["sets"]["lds"]["done"] == 3
     assert "timed out" in summary["sets"]["points"]["problems"][0]["reason"]
-    text = (wf / "results" / "summary.txt").read_text()
+    text = (wf / "results" / "sweeps_summary.txt").read_text()
     assert "broken-f0.3000-d20.000-h60.000-v5.0000-s1: failed: timed out" in text
 
 
