@@ -105,7 +105,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # steady only while the heap ahead of it is tall against the gap, a wedge at the angle of
         # repose whose area grows as h^2 (docs/precision: a pile of what passes x 1.5 at h/d = 7.5
         # fed a flow that fell from 0.5 to 0.1 within the window). Its area is pile_reserve x h^2.
-        need += scene.get("pile_reserve", 0.0) * h * h * packing * heap / (h + heap)
+        need += scene.get("pile_reserve", 4.7) * h * h * packing * heap / (h + heap)
     pile_length = max(preset["pile_length_min_d"] * d, need / (packing * heap))
     pile_height = h + heap
     n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))
