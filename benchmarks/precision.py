@@ -78,9 +78,8 @@ ARMS = {
     "window8": {"rev": None, "overrides": {"scene": {"pile_reserve": 0.0}}},
     # this tree as shipped: window8 with the pile's standing reserve (scene.pile_reserve)
     "shipped": {"rev": None, "overrides": {}},
-    # the pile's standing reserve (scene.pile_reserve_h, in gap heights), tried where the shipped
-    # arm's pile ran down within the window (h/d >= 3)
-    # (tried as a heap h or 2 h long; shipped as an area pile_reserve x h^2, which gives 2 h at the corner)
+    # the pile's standing reserve tried at the corner, where window8's pile ran down: a heap h and
+    # 2 h long there (pile_reserve x h^2 / (h + heap)); the shipped 4.7 is the 2 h heap
     "reserve_1h": {"rev": None, "overrides": {"scene": {"pile_reserve": 2.33}}, "points": ["fine_thick_corner"]},
     "reserve_2h": {"rev": None, "overrides": {"scene": {"pile_reserve": 4.67}}, "points": ["fine_thick_corner"]},
 }

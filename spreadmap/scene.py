@@ -33,8 +33,9 @@ def hertz_contact_time(radius: float, density: float, material: dict, speed: flo
 
 
 def counting_constant(config: dict) -> float:
-    """c of the counting noise, a case's relative SD of MFR = c / sqrt(N) (config metrics.counting_noise_c)."""
-    return float(config.get("metrics", {}).get("counting_noise_c", 0.45))
+    """c of the counting noise, a case's relative SD of MFR = c / sqrt(N) (config
+    metrics.counting_noise_c; validation fills the schema's default)."""
+    return float(config["metrics"]["counting_noise_c"])
 
 
 def precision_target(preset: dict, config: dict) -> float | None:
@@ -105,7 +106,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # steady only while the heap ahead of it is tall against the gap, a wedge at the angle of
         # repose whose area grows as h^2 (docs/precision: a pile of what passes x 1.5 at h/d = 7.5
         # fed a flow that fell from 0.5 to 0.1 within the window). Its area is pile_reserve x h^2.
-        need += scene.get("pile_reserve", 4.7) * h * h * packing * heap / (h + heap)
+        need += scene["pile_reserve"] * h * h * packing * heap / (h + heap)
     pile_length = max(preset["pile_length_min_d"] * d, need / (packing * heap))
     pile_height = h + heap
     n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))
