@@ -32,7 +32,7 @@ def hertz_contact_time(radius: float, density: float, material: dict, speed: flo
     return 2.868 * ((0.5 * mass) ** 2 / (0.5 * radius * e_star ** 2 * speed)) ** 0.2
 
 
-def counting_constant(config: dict) -> float:
+def configured_counting_c(config: dict) -> float:
     """c of the counting noise, a case's relative SD of MFR = c / sqrt(N) (config
     metrics.counting_noise_c; validation fills the schema's default)."""
     return float(config["metrics"]["counting_noise_c"])
@@ -44,7 +44,7 @@ def precision_target(preset: dict, config: dict) -> float | None:
     cv = preset.get("target_cv")
     if cv is None:
         return None
-    return math.ceil((counting_constant(config) / cv) ** 2)
+    return math.ceil((configured_counting_c(config) / cv) ** 2)
 
 
 def time_step(diameter: float, density: float, material: dict, preset: dict, preset_name: str) -> tuple[float, float]:
@@ -186,5 +186,5 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "steady_min_travel": None if preset.get("steady_min_d") is None else preset["steady_min_d"] * d,
         "steady_span": float(scene.get("steady_span_d", 2.0)) * d,
         "steady_z": float(scene.get("steady_z", 2.0)),
-        "counting_noise_c": counting_constant(config),
+        "counting_noise_c": configured_counting_c(config),
     }
