@@ -154,7 +154,23 @@ def run_job(job: dict) -> dict:
     # a generous outer limit: a benchmark on a busy machine must not lose its slowest cases
     result = run_case(job["script"], raw_path, case_dir / "run.log", 4.0 * params["timeout_s"])
     (case_dir / "result.json").write_text(json.dumps(result))
+    (case_dir / "arm.json").write_text(json.dumps(arm_identity(job)))
     return result
+
+
+def arm_identity(job: dict) -> dict:
+    """What makes a kept case this job's: its arm's definition, point and seed. A kept case
+    directory is re-used only when its arm.json equals this (an arm renamed or redefined since, or
+    a directory from before arm.json, is run again rather than read under the wrong name)."""
+    return {"arm": job["arm"], "rev": ARMS[job["arm"]]["rev"], "overrides": job["overrides"],
+            "point": list(job["point"]), "seed": job["seed"]}
+
+
+def kept(job: dict) -> bool:
+    case_dir = Path(job["case_dir"])
+    if not (case_dir / "result.json").exists() or not (case_dir / "arm.json").exists():
+        return False
+    return json.loads((case_dir / "arm.json").read_text()) == json.loads(json.dumps(arm_identity(job)))
 
 
 def case_row(job: dict, config: dict) -> dict:
@@ -433,8 +449,7 @@ def main(argv=None) -> int:
         start = time.perf_counter()
         context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=args.workers, mp_context=context) as pool:
-            futures = {pool.submit(run_job, job): job for job in jobs_to_run
-                       if not (Path(job["case_dir"]) / "result.json").exists()}  # a kept run resumes
+            futures = {pool.submit(run_job, job): job for job in jobs_to_run if not kept(job)}  # a kept run resumes
             for done, future in enumerate(as_completed(futures), 1):
                 job = futures[future]
                 try:

@@ -84,3 +84,21 @@ def test_recorded_noise_against_the_seed_spread_pooled_and_its_interval_covers()
         hits += lo <= 0.30 / 0.45 <= hi
     assert np.median(estimates) == pytest.approx(0.30 / 0.45, rel=0.05)
     assert 180 <= hits <= 200
+
+
+def test_a_kept_case_is_reused_only_under_the_arm_that_ran_it(tmp_path):
+    """A kept case directory is read back only when its arm.json names the same arm definition,
+    point and seed: a directory left by an arm since renamed (the first `shipped` arm became
+    `window8`) or from before arm.json is run again, not read under the wrong arm."""
+    job = bench.build_jobs(["shipped"], ["normal"], [1], tmp_path)[0]
+    case_dir = tmp_path / "cases" / "shipped-normal-s1"
+    case_dir.mkdir(parents=True)
+    (case_dir / "result.json").write_text("{}")
+    assert not bench.kept(job)  # no arm.json: an older run's directory
+    (case_dir / "arm.json").write_text(bench.json.dumps(bench.arm_identity(job)))
+    assert bench.kept(job)
+    renamed = bench.build_jobs(["window8"], ["normal"], [1], tmp_path)[0]
+    renamed["case_dir"] = job["case_dir"]  # the same directory, read for another arm
+    assert not bench.kept(renamed)
+    other_seed = {**job, "seed": 2}
+    assert not bench.kept(other_seed)
