@@ -351,7 +351,28 @@ def test_a_broken_stability_bound_flags_the_case(kind, expected):
     m = case_metrics(raw_record(**kind), RULES, BOUNDS, SETTINGS)
     assert m["flagged"] and expected in m["flag_reason"]
     if kind.get("status") == "blown":
-        assert all(math.isnan(m[k]) for k in NEW_COLUMNS) and m["regime"] == ""
+        measured = [k for k in NEW_COLUMNS if not k.startswith("peak_overlap") and k != "wedged"]
+        assert all(math.isnan(m[k]) for k in measured) and m["regime"] == ""
+
+
+@pytest.mark.parametrize("free,wedged,flagged,is_wedged", [
+    (0.02, 0.13, False, True),    # a sphere pinned under the blade: reported, kept
+    (0.08, 0.0, True, False),     # an impact beyond the bound: flagged
+    (0.07, 0.12, True, True),     # both
+    (0.02, 0.03, False, False),   # neither
+])
+def test_the_overlap_flag_reads_the_free_peak_and_reports_a_wedge(free, wedged, flagged, is_wedged):
+    raw = raw_record(overlap=max(free, wedged))
+    raw["peak_overlap_free"], raw["peak_overlap_wedged"] = free, wedged
+    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    assert m["flagged"] is flagged and ("peak overlap" in m["flag_reason"]) is flagged
+    assert m["wedged"] is is_wedged and m["peak_overlap_free"] == free and m["peak_overlap_wedged"] == wedged
+    assert m["peak_overlap_ratio"] == max(free, wedged)
+
+
+def test_a_raw_record_from_before_the_split_counts_its_whole_peak_as_free():
+    m = case_metrics(raw_record(overlap=0.09), RULES, BOUNDS, SETTINGS)
+    assert m["flagged"] and m["peak_overlap_free"] == 0.09 and math.isnan(m["peak_overlap_wedged"]) and not m["wedged"]
 
 
 def test_peak_overlap_by_phase_columns():

@@ -30,7 +30,7 @@ from yade import (Bo1_Box_Aabb, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Bo
                   Ig2_Box_Sphere_ScGeom6D, Ig2_Sphere_Sphere_ScGeom, Ig2_Sphere_Sphere_ScGeom6D,
                   InsertionSortCollider, InteractionLoop,
                   Ip2_FrictMat_FrictMat_MindlinPhys, Law2_ScGeom_MindlinPhys_Mindlin,
-                  NewtonIntegrator, PyRunner)
+                  NewtonIntegrator, PyRunner, Sphere)
 import yade._utils
 import yade.config
 
@@ -260,7 +260,7 @@ O.engines = [
 
 state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": None,
          "peak_overlap_ratio": 0.0, "rolled_off": 0, "removed_behind_volume": 0.0, "max_speed_seen": 0.0, "status": None, "reason": "",
-         "peak_overlap_by_phase": {},
+         "peak_overlap_by_phase": {}, "peak_overlap_free": 0.0, "peak_overlap_wedged": 0.0,
          "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start}
 single_particle_ke_bound = 0.5 * mass * P["max_speed"] ** 2
 
@@ -340,6 +340,7 @@ def monitor():
     the blade stays counted as passed), and the volume passed under the blade."""
     overlap = max([i.geom.penetrationDepth / R for i in O.interactions if i.isReal] or [0.0])
     state["peak_overlap_ratio"] = max(state["peak_overlap_ratio"], overlap)
+    attribute_overlap(overlap)
     for by_phase, value in ((state["peak_overlap_by_phase"], overlap), (state["max_speed_by_phase"], max_speed())):
         by_phase[state["phase"]] = max(by_phase.get(state["phase"], 0.0), value)
     fallen = [b for b in spheres() if b.state.pos[2] < -2.0 * d]
@@ -366,6 +367,46 @@ def record_overlap():
     by_phase = state["peak_overlap_by_phase"]
     if overlap > by_phase.get(state["phase"], 0.0):
         by_phase[state["phase"]] = overlap
+    attribute_overlap(overlap)
+
+
+def blade_pressed_overlap():
+    """The largest overlap / reduced radius of the contacts of the spheres the blade touches (their
+    contacts with the blade included): a sphere pinned between the moving blade and the substrate
+    or the powder below. The blade is driven at its speed whatever the force, so such a wedge
+    presses until the sphere squeezes out; its overlap measures that, not the time step."""
+    blade = state["blade"]
+    if blade is None:
+        return 0.0
+    best = 0.0
+    for contact in O.bodies[blade].intrs():
+        if not contact.isReal:
+            continue
+        pinned = contact.id2 if contact.id1 == blade else contact.id1
+        best = max(best, contact.geom.penetrationDepth / O.bodies[pinned].shape.radius)
+        for i in O.bodies[pinned].intrs():
+            if not i.isReal or i.id1 == blade or i.id2 == blade:
+                continue
+            s1, s2 = O.bodies[i.id1].shape, O.bodies[i.id2].shape
+            if isinstance(s1, Sphere) and isinstance(s2, Sphere):
+                best = max(best, i.geom.penetrationDepth * (s1.radius + s2.radius) / (2.0 * s1.radius * s2.radius))
+            else:  # a box (floor, side wall)
+                best = max(best, i.geom.penetrationDepth / O.bodies[pinned].shape.radius)
+    return best
+
+
+def attribute_overlap(overlap):
+    """Split the peak overlap by cause: `wedged` when the largest overlap of this step is at a
+    sphere the blade presses (blade_pressed_overlap), `free` otherwise (impacts, the pile's
+    weight: what the time step and the stiffness decide, the stability bound's business). Looked
+    at only when this step's overlap beats the free record, so a cheap check at most steps. While
+    a wedge holds the step's largest overlap, a smaller free one in the same step goes unseen."""
+    if overlap <= state["peak_overlap_free"]:
+        return
+    if state["phase"] == "move" and blade_pressed_overlap() >= overlap * (1.0 - 1e-9):
+        state["peak_overlap_wedged"] = max(state["peak_overlap_wedged"], overlap)
+    else:
+        state["peak_overlap_free"] = overlap
 
 
 def kinetic_energy_settled():
@@ -506,6 +547,8 @@ raw = {
                  "floor_x": [x_lo, x_hi], "pile_length": L},
     "peak_overlap_ratio": state["peak_overlap_ratio"],
     "peak_overlap_by_phase": state["peak_overlap_by_phase"],  # settle (the fall), relax, move (spreading)
+    "peak_overlap_free": state["peak_overlap_free"],      # impacts and weight: the stability bound's
+    "peak_overlap_wedged": state["peak_overlap_wedged"],  # a sphere the moving blade pressed
     "max_speed_seen": max(state["max_speed_seen"], end["max_speed"]),
     "final_kinetic_energy": end["kinetic_energy"],
     "kinetic_energy_scale": ke_scale,

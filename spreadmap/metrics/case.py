@@ -17,7 +17,8 @@ PHASES = ("settle", "relax", "move")  # the phases of the scene, in order (yade_
 
 # columns added by the layer / precision work (issues 13, 14), after every older column
 NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_packing", "coverage",
-               "roughness_d", "thickness_ratio", "flow_trend", "flow_trend_z")
+               "roughness_d", "thickness_ratio", "flow_trend", "flow_trend_z", "peak_overlap_free",
+               "peak_overlap_wedged", "wedged")
 SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batches", "surface_grid_d")
 
 
@@ -71,6 +72,19 @@ def measure(raw: dict, settings: dict) -> dict:
     return out
 
 
+def overlap_by_cause(raw: dict, peak: float, bound: float) -> dict:
+    """The peak overlap split by cause (the scene's attribute_overlap): `free` (impacts, the pile's
+    weight: the time step's and the stiffness's doing, which the stability bound is for) and
+    `wedged` (a sphere pinned between the moving blade and what lies below it: the blade is driven
+    whatever the force, so the overlap grows until the sphere squeezes out, at any time step; a
+    particle dragged by the blade, reported as `wedged` and not flagged). Raw records from before
+    the split have only the whole peak, which then counts as free."""
+    if "peak_overlap_free" not in raw:
+        return {"peak_overlap_free": peak, "peak_overlap_wedged": math.nan, "wedged": False}
+    wedged = raw["peak_overlap_wedged"]
+    return {"peak_overlap_free": raw["peak_overlap_free"], "peak_overlap_wedged": wedged, "wedged": wedged > bound}
+
+
 def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict) -> dict:
     """Everything the results table needs from one raw record (ok, blown or failed).
     regime_rules, stability, settings: the config's `regime`, `stability` and `metrics`."""
@@ -105,11 +119,12 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         "yade_version": raw.get("yade_version", ""),
     }
     new = {k: math.nan for k in NEW_COLUMNS}
+    new.update(overlap_by_cause(raw, out["peak_overlap_ratio"], stability["max_overlap_ratio"]))
     flags = []
     if raw["status"] == "ok":
         measured = measure(raw, settings)
         out.update({k: measured[k] for k in ("mfr", "pd", "pd_cv")})
-        new.update({k: measured[k] for k in NEW_COLUMNS})
+        new.update({k: measured[k] for k in NEW_COLUMNS if k in measured})
         out["regime"] = classify(out["mfr"], new["coverage"], new["thickness_ratio"], regime_rules)
         for name in ("mfr", "pd"):
             if not 0.0 <= out[name] <= DENSEST_PACKING:
@@ -118,8 +133,8 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         flags.append(f"{raw['status']}: {raw.get('reason', '')}".strip())
     if out["time_step_ratio"] > 1.0:
         flags.append(f"time step {out['time_step_ratio']:.2f} x critical")
-    if out["peak_overlap_ratio"] > stability["max_overlap_ratio"]:
-        flags.append(f"peak overlap {out['peak_overlap_ratio']:.3g} R > {stability['max_overlap_ratio']} R")
+    if new["peak_overlap_free"] > stability["max_overlap_ratio"]:
+        flags.append(f"peak overlap {new['peak_overlap_free']:.3g} R > {stability['max_overlap_ratio']} R")
     z_max = stability.get("max_flow_decline_z", 3.0)
     if z_max is not None and new["flow_trend_z"] < -z_max:  # nan (no series) compares False
         flags.append(f"flow fell by {-new['flow_trend']:.0%} over the window ({new['flow_trend_z']:.1f} SE): "
