@@ -1,0 +1,84 @@
+"""The held-out check of a finished study: design points that no sweep ran, predicted by the final
+surrogate before they run, then run with several packing seeds and scored against the prediction
+intervals. Points come from a scrambled Sobol' sequence (scipy.stats.qmc) of their own seed, kept
+only when far enough from every case already run, so they test the surrogate between its cases."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+from scipy.stats import qmc
+
+from ..design import NAMES
+
+Z95 = stats.norm.ppf(0.975)
+
+
+def to_unit(points: pd.DataFrame, ranges: dict) -> np.ndarray:
+    """Design-space coordinates (config `ranges`: f, d_um, h_um, v_mm_s) scaled to [0, 1]^4."""
+    lo = np.array([ranges[n]["min"] for n in NAMES], float)
+    hi = np.array([ranges[n]["max"] for n in NAMES], float)
+    return (points[list(NAMES)].to_numpy(float) - lo) / (hi - lo)
+
+
+def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float = 0.15,
+                  seed: int = 2026) -> pd.DataFrame:
+    """n points of a scrambled Sobol' sequence in the design space, each at least min_distance
+    (Euclidean, unit cube) from every point of `ran` (the cases of every sweep) and from the points
+    already chosen. Raises ValueError when 64 n candidates do not give n such points."""
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    candidates = qmc.Sobol(d=len(NAMES), scramble=True, seed=seed).random(int(2 ** math.ceil(math.log2(64 * n))))
+    taken = [row for row in to_unit(ran, ranges)] if len(ran) else []
+    chosen = []
+    for u in candidates:
+        if all(np.linalg.norm(u - t) >= min_distance for t in taken):
+            chosen.append(u)
+            taken.append(u)
+            if len(chosen) == n:
+                break
+    if len(chosen) < n:
+        raise ValueError(f"only {len(chosen)} of {n} held-out points lie {min_distance} (unit cube) from every case "
+                         f"run; lower min_distance")
+    lo = np.array([ranges[k]["min"] for k in NAMES], float)
+    hi = np.array([ranges[k]["max"] for k in NAMES], float)
+    out = pd.DataFrame(lo + np.asarray(chosen) * (hi - lo), columns=list(NAMES))
+    out.insert(0, "name", [f"heldout_{i + 1:02d}" for i in range(n)])
+    return out
+
+
+def score(predictions: pd.DataFrame, cases: pd.DataFrame, target: str, level: float = 0.95) -> tuple[pd.DataFrame, dict]:
+    """Each held-out point's seed mean against its prediction made before the runs.
+
+    predictions: one row per point (`name`, `<target>`, `<target>_model_sd`, `<target>_run_sd` as
+    spreadmap.surrogate.predict writes them). cases: one row per run (`name`, `<target>`), usable
+    runs only. The seed mean of n runs has SD sqrt(model_sd^2 + noise^2 / n) about the
+    prediction, noise^2 = run_sd^2 - model_sd^2 (the SD of one new run, less the model's part).
+    Returns the per-point table (mean, n, prediction, sd, z, inside) and the summary: coverage of
+    the `level` intervals with its Clopper-Pearson interval (scipy.stats.binomtest), RMSE of the
+    seed means against the prediction and the RMSE the stated SDs predict, the mean of z^2 (1 when
+    the SDs are right)."""
+    z_level = stats.norm.ppf(0.5 + level / 2.0)
+    by_point = cases.groupby("name")[target].agg(["mean", "count", "std"]).rename(
+        columns={"mean": "seed_mean", "count": "n_runs", "std": "seed_sd"})
+    table = predictions.set_index("name")[[target, f"{target}_model_sd", f"{target}_run_sd"]].join(by_point, how="inner")
+    if table.empty:
+        raise ValueError("no held-out point has both a prediction and a usable run")
+    model_sd, run_sd = table[f"{target}_model_sd"], table[f"{target}_run_sd"]
+    noise_var = np.clip(run_sd ** 2 - model_sd ** 2, 0.0, None)
+    table["sd_of_mean"] = np.sqrt(model_sd ** 2 + noise_var / table["n_runs"])
+    table["error"] = table["seed_mean"] - table[target]
+    table["z"] = table["error"] / table["sd_of_mean"]
+    table["inside"] = table["z"].abs() <= z_level
+    k, n = int(table["inside"].sum()), len(table)
+    ci = stats.binomtest(k, n).proportion_ci(confidence_level=0.95, method="exact")
+    summary = {"target": target, "level": level, "points": n, "inside": k, "coverage": k / n,
+               "coverage_low": ci.low, "coverage_high": ci.high,
+               "rmse": float(np.sqrt(np.mean(table["error"] ** 2))),
+               "rmse_expected": float(np.sqrt(np.mean(table["sd_of_mean"] ** 2))),
+               "mean_z2": float(np.mean(table["z"] ** 2)),
+               # chi-square test of "the stated SDs are right": sum z^2 ~ chi2(n)
+               "p_sd_right": float(stats.chi2.sf(np.sum(table["z"] ** 2), n))}
+    return table.reset_index(), summary

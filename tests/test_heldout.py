@@ -1,0 +1,77 @@
+"""The held-out check (spreadmap.surrogate.heldout) on synthetic studies whose truth, model error
+and run noise are known."""
+import numpy as np
+import pandas as pd
+import pytest
+
+from spreadmap.surrogate.heldout import choose_points, score, to_unit
+
+RANGES = {"f": {"min": 0.15, "max": 0.45}, "d_um": {"min": 10, "max": 50}, "h_um": {"min": 55, "max": 75},
+          "v_mm_s": {"min": 5, "max": 15}}
+
+
+def test_chosen_points_are_in_range_far_from_the_runs_and_from_one_another():
+    rng = np.random.default_rng(3)
+    ran = pd.DataFrame({k: rng.uniform(r["min"], r["max"], 40) for k, r in RANGES.items()})
+    pts = choose_points(12, RANGES, ran, min_distance=0.2, seed=5)
+    u, v = to_unit(pts, RANGES), to_unit(ran, RANGES)
+    assert len(pts) == 12 and list(pts["name"])[:2] == ["heldout_01", "heldout_02"]
+    assert ((u >= 0) & (u <= 1)).all()
+    assert np.min(np.linalg.norm(u[:, None, :] - v[None, :, :], axis=2)) >= 0.2
+    pair = np.linalg.norm(u[:, None, :] - u[None, :, :], axis=2) + np.eye(12) * 9
+    assert pair.min() >= 0.2
+    # reproducible from its seed, another seed another set
+    assert choose_points(12, RANGES, ran, 0.2, seed=5).equals(pts)
+    assert not choose_points(12, RANGES, ran, 0.2, seed=6).equals(pts)
+
+
+def test_too_crowded_a_space_is_refused_with_the_knob_to_turn():
+    ran = pd.DataFrame({k: np.linspace(r["min"], r["max"], 5) for k, r in RANGES.items()})
+    with pytest.raises(ValueError, match="lower min_distance"):
+        choose_points(12, RANGES, ran, min_distance=0.9)
+
+
+def synthetic(rng, n_points, seeds, model_sd, noise_sd, stated_model_sd):
+    """Predictions off the truth by N(0, model_sd); runs = truth + N(0, noise_sd); the
+    predictions state stated_model_sd and the right noise."""
+    names = [f"p{i}" for i in range(n_points)]
+    truth = rng.uniform(0.2, 0.5, n_points)
+    pred = truth + rng.normal(0, model_sd, n_points)
+    predictions = pd.DataFrame({"name": names, "mfr": pred, "mfr_model_sd": stated_model_sd,
+                                "mfr_run_sd": np.sqrt(stated_model_sd ** 2 + noise_sd ** 2)})
+    cases = pd.DataFrame({"name": np.repeat(names, seeds),
+                          "mfr": np.repeat(truth, seeds) + rng.normal(0, noise_sd, n_points * seeds)})
+    return predictions, cases
+
+
+def test_right_intervals_cover_at_their_level_and_pass_the_sd_test():
+    rng = np.random.default_rng(11)
+    inside = total = 0
+    p_values = []
+    for _ in range(200):
+        pred, cases = synthetic(rng, 12, 4, 0.02, 0.03, 0.02)
+        _, s = score(pred, cases, "mfr")
+        inside, total = inside + s["inside"], total + s["points"]
+        p_values.append(s["p_sd_right"])
+    assert inside / total == pytest.approx(0.95, abs=0.015)  # 2400 points: SE 0.0045
+    assert np.mean(np.array(p_values) < 0.05) == pytest.approx(0.05, abs=0.035)
+
+
+def test_overconfident_intervals_are_caught():
+    rng = np.random.default_rng(12)
+    pred, cases = synthetic(rng, 40, 4, 0.06, 0.03, 0.01)  # the model claims 0.01, is off by 0.06
+    table, s = score(pred, cases, "mfr")
+    assert s["coverage_high"] < 0.95 and s["p_sd_right"] < 1e-3
+    assert s["rmse"] > 2 * s["rmse_expected"]
+    # the seed mean of 4 runs: SD sqrt(0.01^2 + 0.03^2 / 4)
+    assert table["sd_of_mean"].iloc[0] == pytest.approx(np.sqrt(0.01 ** 2 + 0.03 ** 2 / 4))
+    assert (table["n_runs"] == 4).all()
+
+
+def test_points_without_runs_are_left_out_and_none_at_all_is_an_error():
+    rng = np.random.default_rng(13)
+    pred, cases = synthetic(rng, 5, 3, 0.02, 0.03, 0.02)
+    table, s = score(pred, cases[cases["name"] != "p0"], "mfr")
+    assert s["points"] == 4 and "p0" not in set(table["name"])
+    with pytest.raises(ValueError, match="no held-out point"):
+        score(pred, cases.iloc[0:0], "mfr")
