@@ -75,3 +75,59 @@ def test_points_without_runs_are_left_out_and_none_at_all_is_an_error():
     assert s["points"] == 4 and "p0" not in set(table["name"])
     with pytest.raises(ValueError, match="no held-out point"):
         score(pred, cases.iloc[0:0], "mfr")
+
+
+def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_path):
+    """End to end on a synthetic study (tests/synthetic_cases.py): a surrogate fitted on 48 noisy
+    cases and saved; `choose` writes 12 points x 4 seeds away from them and their predictions;
+    runs drawn from the truth with the known noise (one flagged, left out) are scored by `score`.
+    The GP's intervals on this smooth truth should hold most seed means; the test asks >= 9 of 12
+    (a 95 % interval misses 3 or more of 12 with probability 0.02)."""
+    import json
+    import subprocess
+    import sys
+
+    import synthetic_cases as syn
+    from conftest import ROOT
+    from spreadmap.design import NAMES
+    from spreadmap.surrogate import fitting, saved_model
+
+    train = syn.table(48, 0.07, seed=1)
+    quick = {"cv_repeats": 1, "gp_restarts": 0, "learning_curve": False, "mlp_sizes": [4], "mlp_alphas": [1.0],
+             "ensemble_members": 4, "neurons": [2, 4], "seeds": [0, 1, 2]}
+    model = tmp_path / "model.joblib"
+    saved_model.save_model(fitting.fit_surrogate(train, quick, log=lambda *a: None).model, model)
+    ran = tmp_path / "ran.csv"
+    train.to_csv(ran, index=False)
+    points, predictions = tmp_path / "points.csv", tmp_path / "pred.csv"
+    script = [sys.executable, str(ROOT / "scripts" / "heldout.py")]
+    r = subprocess.run([*script, "choose", "--model", str(model), "--ran", str(ran), "--points", str(points),
+                        "--predictions", str(predictions), "--min-distance", "0.1"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    runs = pd.read_csv(points)
+    assert len(runs) == 48 and set(runs["seed"]) == {1, 2, 3, 4} and runs["name"].nunique() == 12
+    assert (runs["preset"] == "default").all()
+    rng = np.random.default_rng(21)
+    X = runs[list(NAMES)].to_numpy(float)
+    table = runs[list(NAMES) + ["seed"]].copy()
+    table["status"], table["flagged"] = "ok", False
+    for t in ("mfr", "pd"):
+        table[t] = syn.TRUTH[t](X) + rng.normal(0, syn.noise_sd(X, t, 0.07))
+    table.loc[0, "flagged"] = True  # a flagged run is not scored
+    table.to_csv(tmp_path / "table.csv", index=False)
+    out = tmp_path / "score.csv"
+    r = subprocess.run([*script, "score", "--points", str(points), "--predictions", str(predictions),
+                        "--table", str(tmp_path / "table.csv"), "--out", str(out)],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    scored = pd.read_csv(out)
+    summary = json.loads(out.with_suffix(".json").read_text())
+    assert [s["target"] for s in summary] == ["mfr", "pd"] and all(s["points"] == 12 for s in summary)
+    assert scored["n_runs"].sum() == 2 * 47  # 48 runs less the flagged one, per target
+    assert all(s["inside"] >= 9 for s in summary), summary
+    assert "seed means inside their 95% intervals" in r.stdout
+    # a missing file is one line, status 2
+    r = subprocess.run([*script, "score", "--points", str(tmp_path / "none.csv"), "--predictions", str(predictions),
+                        "--table", str(out)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and r.stderr.startswith("heldout.py: error: file not found") and r.stderr.count("\n") == 1

@@ -11,7 +11,9 @@ import pandas as pd
 from scipy import stats
 from scipy.stats import qmc
 
+from ..cases import rounded
 from ..design import NAMES
+from ..table import usable
 
 Z95 = stats.norm.ppf(0.975)
 
@@ -82,3 +84,21 @@ def score(predictions: pd.DataFrame, cases: pd.DataFrame, target: str, level: fl
                # chi-square test of "the stated SDs are right": sum z^2 ~ chi2(n)
                "p_sd_right": float(stats.chi2.sf(np.sum(table["z"] ** 2), n))}
     return table.reset_index(), summary
+
+
+def runs_of(points: pd.DataFrame, seeds: list[int], preset: str) -> pd.DataFrame:
+    """The points file to run (the README's points format: name, preset, seed, f, d_um, h_um,
+    v_mm_s), one row per point and packing seed, each point rounded as it will be simulated."""
+    rows = [{"name": r["name"], "preset": preset, "seed": int(s), **rounded(r)} for _, r in points.iterrows()
+            for s in seeds]
+    return pd.DataFrame(rows, columns=["name", "preset", "seed", *NAMES])
+
+
+def match_runs(points: pd.DataFrame, table: pd.DataFrame) -> pd.DataFrame:
+    """The usable rows of a results table (spreadmap.table.usable) that ran a held-out point, with
+    the point's name: matched on the rounded design point, as the workflow names its cases."""
+    key = lambda r: tuple(rounded(r)[n] for n in NAMES)  # noqa: E731
+    names = {key(r): r["name"] for _, r in points.iterrows()}
+    ok = table[usable(table)].copy()
+    ok["name"] = [names.get(key(r)) for _, r in ok.iterrows()]
+    return ok[ok["name"].notna()]

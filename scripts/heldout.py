@@ -1,0 +1,111 @@
+#!/usr/bin/env python
+"""The held-out check of a study (spreadmap.surrogate.heldout), in two steps with the runs between:
+
+    # 1. before any run: choose the points away from every case run, predict them, write both
+    python scripts/heldout.py choose --model results/surrogate/model.joblib \\
+        --ran results/converge/table.csv results/tables/lds.csv --n 12 --seeds 1 2 3 4 \\
+        --points heldout_points.csv --predictions heldout_predictions.csv
+    # 2. run them: config `points: {csv: heldout_points.csv}`, then `snakemake points`
+    # 3. score the runs against the intervals stated in step 1
+    python scripts/heldout.py score --points heldout_points.csv --predictions heldout_predictions.csv \\
+        --table results/tables/points.csv --targets mfr pd --out heldout_score.csv
+
+Commit the predictions before the runs: they are the claim the runs test. Errors in the input
+exit with status 2 and a one-line message.
+"""
+import argparse
+import json
+import sys
+from pathlib import Path
+
+try:
+    import spreadmap  # noqa: F401
+except ImportError:  # not installed: use the checkout
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import pandas as pd
+
+from spreadmap import config as spreadmap_config
+from spreadmap.files import atomic_path
+from spreadmap.surrogate import heldout
+from spreadmap.surrogate.cli import predict_logged
+from spreadmap.surrogate.saved_model import ModelFileError, load_model
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def write_csv(df: pd.DataFrame, path: str) -> None:
+    with atomic_path(Path(path)) as tmp:
+        df.to_csv(tmp, index=False)
+
+
+def read_csv(path: str) -> pd.DataFrame:
+    if not Path(path).is_file():
+        raise ValueError(f"file not found: {path}")
+    return pd.read_csv(path)
+
+
+def choose(args) -> int:
+    cfg = spreadmap_config.load(Path(args.config))
+    ran = pd.concat([read_csv(p) for p in args.ran], ignore_index=True)
+    points = heldout.choose_points(args.n, cfg["ranges"], ran, args.min_distance, args.seed)
+    model = load_model(args.model)
+    predictions = predict_logged(model, points, sys.stderr)
+    write_csv(heldout.runs_of(points, args.seeds, args.preset), args.points)
+    write_csv(predictions, args.predictions)
+    print(f"{args.n} held-out points ({len(args.seeds)} seeds each) in {args.points}; "
+          f"their predictions in {args.predictions}")
+    return 0
+
+
+def score(args) -> int:
+    points = read_csv(args.points).drop_duplicates("name")
+    runs = heldout.match_runs(points, read_csv(args.table))
+    predictions = read_csv(args.predictions)
+    tables, summaries = [], []
+    for target in args.targets:
+        table, summary = heldout.score(predictions, runs, target, args.level)
+        tables.append(table.assign(target=target).rename(columns={target: "predicted"}))
+        summaries.append(summary)
+        print(f"{target}: {summary['inside']}/{summary['points']} seed means inside their "
+              f"{args.level:.0%} intervals (coverage {summary['coverage']:.2f}, 95 % CI "
+              f"{summary['coverage_low']:.2f}-{summary['coverage_high']:.2f}); RMSE {summary['rmse']:.4f} against "
+              f"{summary['rmse_expected']:.4f} expected from the stated SDs; mean z^2 {summary['mean_z2']:.2f} "
+              f"(p = {summary['p_sd_right']:.2g} for 'the SDs are right')")
+    if args.out:
+        write_csv(pd.concat(tables, ignore_index=True), args.out)
+        Path(args.out).with_suffix(".json").write_text(json.dumps(summaries, indent=1))
+    return 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="heldout.py", description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="step", required=True)
+    c = sub.add_parser("choose", help="choose and predict the held-out points (before any run)")
+    c.add_argument("--model", required=True, help="the saved surrogate (results/surrogate/model.joblib)")
+    c.add_argument("--ran", nargs="+", required=True, help="results tables of every case run (CSV)")
+    c.add_argument("--n", type=int, default=12)
+    c.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3, 4])
+    c.add_argument("--preset", default="default")
+    c.add_argument("--min-distance", type=float, default=0.15, help="unit-cube distance from every run")
+    c.add_argument("--seed", type=int, default=2026, help="the Sobol' scrambling seed")
+    c.add_argument("--config", default=str(ROOT / "config.yaml"))
+    c.add_argument("--points", required=True, help="points file to write (README points format)")
+    c.add_argument("--predictions", required=True, help="predictions file to write")
+    s = sub.add_parser("score", help="score the runs against the predictions")
+    s.add_argument("--points", required=True)
+    s.add_argument("--predictions", required=True)
+    s.add_argument("--table", required=True, help="results table holding the held-out runs")
+    s.add_argument("--targets", nargs="+", default=["mfr", "pd"])
+    s.add_argument("--level", type=float, default=0.95)
+    s.add_argument("--out", help="per point and target (CSV); the summary beside it (.json)")
+    args = ap.parse_args(argv)
+    try:
+        return choose(args) if args.step == "choose" else score(args)
+    except (ValueError, KeyError, ModelFileError) as e:  # ConfigError is a ValueError
+        print(f"heldout.py: error: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
