@@ -133,7 +133,10 @@ def preset_errors(table: pd.DataFrame, reference: str) -> tuple[pd.DataFrame, pd
                     "particle_steps_per_s": (cases["n_particles"] * cases["steps"] / cases["cpu_time"]).median(),
                     "n_particles_median": cases["n_particles"].median(),
                     "flagged_cases": int(flagged(cases).sum()),
-                    "peak_overlap_max": cases["peak_overlap_ratio"].max()})
+                    # the free peak (impacts, weight: the stability bound's) where the scene split it
+                    "peak_overlap_max": cases.get("peak_overlap_free", cases["peak_overlap_ratio"]).max()})
+        if "wedged" in cases:  # the scene tells a sphere pinned under the blade from the rest
+            row["wedged_cases"] = int(cases["wedged"].astype(str).eq("True").sum())
         if "n_passed" in cases and cases["n_passed"].notna().any():  # windows sized by a precision target
             row["n_passed_median"] = cases["n_passed"].median()
         rows.append(row)
@@ -203,17 +206,18 @@ def markdown_summary(presets: pd.DataFrame, per_point: pd.DataFrame, knobs: pd.D
              "(one core); \"cost vs reference\": the reference's total CPU time over the preset's.", "",
              "| preset | spheres (median) | N passed (median) | CPU per case, median / max | wall per case, median "
              "| cost vs reference | particle-steps/s | MFR error | PD error | seed spread MFR / PD | usable cases "
-             "| peak overlap (max) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| peak free overlap (max) | wedged cases |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for _, r in presets.iterrows():
         cost = "1 (reference)" if r["preset"] == reference else f"{r['cost_ratio_to_reference']:.1f}x cheaper"
         n_passed = f"{r['n_passed_median']:.0f}" if pd.notna(r.get("n_passed_median")) else "-"
+        wedged = f"{r['wedged_cases']:.0f}" if pd.notna(r.get("wedged_cases")) else "-"
         lines.append(f"| {r['preset']} | {r['n_particles_median']:.0f} | {n_passed} "
                      f"| {r['cpu_s_median']:.1f} s / {r['cpu_s_max']:.0f} s "
                      f"| {r['wall_s_median']:.1f} s | {cost} "
                      f"| {r['particle_steps_per_s']:.2e} | {r['mfr_verdict']} | {r['pd_verdict']} "
                      f"| {_pct(r['mfr_seed_cv'])} / {_pct(r['pd_seed_cv'])} | {r['usable_cases']}/{r['cases']} "
-                     f"| {_pct(r['peak_overlap_max'])} R |")
+                     f"| {_pct(r['peak_overlap_max'])} R | {wedged} |")
     lines += ["", "### Per point (seed mean +- seed SD)", "",
               "| point | preset | MFR | PD | MFR error | PD error | CPU per case |", "|---|---|---|---|---|---|---|"]
     for _, r in per_point.sort_values(["name", "preset"], kind="stable").iterrows():

@@ -149,6 +149,23 @@ def test_failed_and_flagged_cases_are_counted_but_kept_out_of_the_means():
     assert presets.set_index("preset").loc["cheap", "flagged_cases"] == 1
 
 
+def test_wedged_cases_are_counted_and_the_overlap_column_is_the_free_peak():
+    """Where the scene split the peak overlap (a sphere pinned under the blade, or the rest), the
+    presets table counts wedged cases (kept: not flagged) and reports the free peak."""
+    table = _table()
+    table["peak_overlap_free"], table["wedged"] = 0.02, False
+    table.loc[table["preset"] == "cheap", "peak_overlap_ratio"] = 0.12
+    table.loc[(table["preset"] == "cheap") & (table["name"] == "a"), "wedged"] = True
+    _, presets = study.preset_errors(table, "reference")
+    cheap = presets.set_index("preset").loc["cheap"]
+    assert cheap["wedged_cases"] == 3 and cheap["peak_overlap_max"] == 0.02 and cheap["flagged_cases"] == 0
+    assert presets.set_index("preset").loc["reference", "wedged_cases"] == 0
+    # tables without the split keep the whole peak and have no wedged column
+    _, old = study.preset_errors(_table(), "reference")
+    assert "wedged_cases" not in old and old["peak_overlap_max"].tolist() == _table().groupby(
+        "preset", sort=False)["peak_overlap_ratio"].max().tolist()
+
+
 def test_goal_states_met_not_met_and_not_resolved():
     _, presets = study.preset_errors(_table(), "reference")
     # MFR 20 % +- 6.8 % (mean 2 SE over the points), PD 1.0 % +- 3.7 %
