@@ -85,7 +85,8 @@ ARMS = {
 }
 CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_packing",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",
-                "peak_overlap_relax", "peak_overlap_move", "rolled_off_particles", "flow_trend", "flow_trend_z", "flagged"]
+                "peak_overlap_relax", "peak_overlap_move", "rolled_off_particles", "flow_trend", "flow_trend_z", "flagged",
+                "peak_overlap_free", "peak_overlap_wedged", "wedged"]
 CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", "cpu_time", "wall_time",
                *CASE_COLUMNS, "case_dir"]
 
@@ -321,10 +322,13 @@ def report(rows: list[dict], arms: list[str]) -> str:
     by_point: dict = {}
     for r in ok:
         by_point.setdefault(r["point"], {}).setdefault(r["arm"], []).append(r)
-    complete = {p: d for p, d in by_point.items()
-                if all(len(d.get(a, [])) >= 2 for a in arms if p in ARMS[a].get("points", POINTS))}
+    # each arm at the points where it has >= 2 seeds beside today's (an arm not run at a point, or
+    # not yet, is left out there and its ratios are over the other points)
+    complete = {p: {a: r for a, r in d.items() if len(r) >= 2} for p, d in by_point.items()}
+    complete = {p: d for p, d in complete.items() if "today" in d or "today" not in arms}
+    per_arm = ", ".join(f"{a} {sum(a in d for d in complete.values())}" for a in arms)
     lines = [f"# Information per CPU-second: {', '.join(arms)}", "",
-             f"{len(ok)} of {len(rows)} cases ok; points with every arm: {len(complete)}.", ""]
+             f"{len(ok)} of {len(rows)} cases ok; points per arm: {per_arm}.", ""]
     lines += ["## Spheres measured per CPU-second (the information per CPU-second if c is the same in every arm)", "",
               "| point | " + " | ".join(arms) + " |", "|---|" + "---|" * len(arms)]
     ratios: dict = {a: [] for a in arms}
@@ -439,7 +443,7 @@ def main(argv=None) -> int:
                 if r["status"] == "ok":
                     published[(r["arm"], r["point"], int(r["seed"]))] = {
                         k: (r[k] if k in ("arm", "point", "status", "regime", "case_dir") else
-                            (r[k] == "True") if k == "flagged" else float(r[k]) if r[k] != "" else math.nan)
+                            (r[k] == "True") if k in ("flagged", "wedged") else float(r[k]) if r[k] != "" else math.nan)
                         for k in r}
         print(f"{len(published)} finished cases taken from {args.resume_csv}", flush=True)
     jobs_to_run = [j for j in jobs if (j["arm"], j["point_name"], j["seed"]) not in published]

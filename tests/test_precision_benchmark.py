@@ -102,3 +102,21 @@ def test_a_kept_case_is_reused_only_under_the_arm_that_ran_it(tmp_path):
     assert not bench.kept(renamed)
     other_seed = {**job, "seed": 2}
     assert not bench.kept(other_seed)
+
+
+def test_an_arm_missing_at_a_point_leaves_the_others_ratios_over_every_point():
+    """The report compares each arm with today's at the points where it has >= 2 seeds: an arm
+    not run at one point (the shipped corner) does not drop that point from the other arms."""
+    rng = np.random.default_rng(4)
+    rows = []
+    for arm, n_passed, cpu in (("today", 50, 20.0), ("window8", 150, 20.0), ("shipped", 150, 40.0)):
+        for p, rs in cases(arm, 0.4, n_passed, cpu, 4, rng, points=3).items():
+            for seed, r in enumerate(rs):
+                if arm == "shipped" and p == "p2":
+                    continue
+                rows.append({**r, "point": p, "seed": seed, "status": "ok", "pd": r["mfr"], "mfr_sd": math.nan})
+    text = bench.report(rows, ["today", "window8", "shipped"])
+    assert "points per arm: today 3, window8 3, shipped 2." in text
+    # spheres per CPU-second: window8 3x today's at each of 3 points, shipped 1.5x at 2
+    assert "**window8**: 3.00x today's spheres per CPU-second, mean over 3 points" in text
+    assert "**shipped**: 1.50x today's spheres per CPU-second, mean over 2 points" in text
