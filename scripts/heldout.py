@@ -26,17 +26,11 @@ except ImportError:  # not installed: use the checkout
 import pandas as pd
 
 from spreadmap import config as spreadmap_config
-from spreadmap.files import atomic_path
 from spreadmap.surrogate import heldout
-from spreadmap.surrogate.cli import predict_logged
+from spreadmap.surrogate.cli import predict_logged, write_csv
 from spreadmap.surrogate.saved_model import ModelFileError, load_model
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def write_csv(df: pd.DataFrame, path: str) -> None:
-    with atomic_path(Path(path)) as tmp:
-        df.to_csv(tmp, index=False)
 
 
 def read_csv(path: str) -> pd.DataFrame:

@@ -66,7 +66,7 @@ def predict_logged(model, points, log) -> pd.DataFrame:
     return out
 
 
-def _write(out: pd.DataFrame, path) -> None:
+def write_csv(out: pd.DataFrame, path) -> None:
     with atomic_path(path) as tmp:
         out.to_csv(tmp, index=False)
 
@@ -98,7 +98,7 @@ def cli_main(argv: Sequence[str] | None = None) -> int:
         print(f"predict.py: error: {e}", file=sys.stderr)
         return 2
     if args.out:
-        _write(out, args.out)
+        write_csv(out, args.out)
     with pd.option_context("display.max_rows", None, "display.max_columns", None, "display.width", 250):
         print(out.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     return 0
@@ -124,4 +124,4 @@ def snakemake_main(smk) -> None:
     sys.stderr.write(buf.getvalue())
     if len(smk.log):
         Path(smk.log[0]).write_text(buf.getvalue())
-    _write(out, smk.output[0])
+    write_csv(out, smk.output[0])
