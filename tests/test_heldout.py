@@ -4,7 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from spreadmap.surrogate.heldout import choose_points, score, to_unit
+from spreadmap.design import NAMES, to_unit
+from spreadmap.surrogate.heldout import choose_points, score
 
 RANGES = {"f": {"min": 0.15, "max": 0.45}, "d_um": {"min": 10, "max": 50}, "h_um": {"min": 55, "max": 75},
           "v_mm_s": {"min": 5, "max": 15}}
@@ -14,7 +15,7 @@ def test_chosen_points_are_in_range_far_from_the_runs_and_from_one_another():
     rng = np.random.default_rng(3)
     ran = pd.DataFrame({k: rng.uniform(r["min"], r["max"], 40) for k, r in RANGES.items()})
     pts = choose_points(12, RANGES, ran, min_distance=0.2, seed=5)
-    u, v = to_unit(pts, RANGES), to_unit(ran, RANGES)
+    u, v = to_unit(pts[list(NAMES)].to_numpy(float), RANGES), to_unit(ran[list(NAMES)].to_numpy(float), RANGES)
     assert len(pts) == 12 and list(pts["name"])[:2] == ["heldout_01", "heldout_02"]
     assert ((u >= 0) & (u <= 1)).all()
     assert np.min(np.linalg.norm(u[:, None, :] - v[None, :, :], axis=2)) >= 0.2
@@ -89,7 +90,6 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
 
     import synthetic_cases as syn
     from conftest import ROOT
-    from spreadmap.design import NAMES
     from spreadmap.surrogate import fitting, saved_model
 
     train = syn.table(48, 0.07, seed=1)

@@ -12,17 +12,8 @@ from scipy import stats
 from scipy.stats import qmc
 
 from ..cases import rounded
-from ..design import NAMES
+from ..design import NAMES, to_physical, to_unit
 from ..table import usable
-
-Z95 = stats.norm.ppf(0.975)
-
-
-def to_unit(points: pd.DataFrame, ranges: dict) -> np.ndarray:
-    """Design-space coordinates (config `ranges`: f, d_um, h_um, v_mm_s) scaled to [0, 1]^4."""
-    lo = np.array([ranges[n]["min"] for n in NAMES], float)
-    hi = np.array([ranges[n]["max"] for n in NAMES], float)
-    return (points[list(NAMES)].to_numpy(float) - lo) / (hi - lo)
 
 
 def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float = 0.15,
@@ -33,7 +24,7 @@ def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float =
     if n < 1:
         raise ValueError(f"n must be >= 1, got {n}")
     candidates = qmc.Sobol(d=len(NAMES), scramble=True, seed=seed).random(int(2 ** math.ceil(math.log2(64 * n))))
-    taken = [row for row in to_unit(ran, ranges)] if len(ran) else []
+    taken = list(to_unit(ran[list(NAMES)].to_numpy(float), ranges)) if len(ran) else []
     chosen = []
     for u in candidates:
         if all(np.linalg.norm(u - t) >= min_distance for t in taken):
@@ -44,9 +35,7 @@ def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float =
     if len(chosen) < n:
         raise ValueError(f"only {len(chosen)} of {n} held-out points lie {min_distance} (unit cube) from every case "
                          f"run; lower min_distance")
-    lo = np.array([ranges[k]["min"] for k in NAMES], float)
-    hi = np.array([ranges[k]["max"] for k in NAMES], float)
-    out = pd.DataFrame(lo + np.asarray(chosen) * (hi - lo), columns=list(NAMES))
+    out = pd.DataFrame(to_physical(np.asarray(chosen), ranges), columns=list(NAMES))
     out.insert(0, "name", [f"heldout_{i + 1:02d}" for i in range(n)])
     return out
 
