@@ -1,0 +1,100 @@
+"""The study's plan (spreadmap.study_cases) is the plan the workflow runs, and the published study
+(docs/study/) holds the cases of that plan with the tables they recompute to."""
+import copy
+import json
+import re
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import ROOT, make_workflow, snakemake
+from spreadmap import config as spreadmap_config
+from spreadmap.cases import case_id
+from spreadmap.study_cases import finished_table, planned_sweeps, progress
+
+DOCS = ROOT / "docs" / "study"
+
+
+def test_the_plan_is_the_workflows_plan(tmp_path):
+    """The case ids the workflow's dry run would render for the sweeps (its own registry in
+    rules/common.smk) are the planned ones, LDS and two lattices sharing their corners."""
+    sweeps = {"lds": {"seed": 42, "partitions": [4, 9]}, "lattice": {"k": [2, 3]}}
+    wf = make_workflow(tmp_path, {"sweeps": sweeps})
+    plan = planned_sweeps(spreadmap_config.load(wf / "config.yaml"))
+    assert [label["index"] for _, label in plan["lds"]] == list(range(9))
+    assert len(plan["lattice"]) == 16 + 81
+    ran = {}
+    for name in ("lds", "lattice"):
+        dry = snakemake(wf, "-n", "--cores", "1", f"results/tables/{name}.csv")
+        assert dry.returncode == 0, dry.stderr[-2000:]
+        ran[name] = set(re.findall(r"results/cases/([^/\s]+)/case\.py", dry.stdout))
+    assert ran["lds"] == {cid for cid, _ in plan["lds"]}
+    assert ran["lattice"] == {cid for cid, _ in plan["lattice"]}
+    assert len(ran["lattice"]) == 81 + 16 - 2 ** 4  # the lattices share their 16 corners
+
+
+def _metrics(point: dict, preset: str, seed: int, status: str = "ok", cpu: float = 60.0) -> dict:
+    return {"case_id": case_id(point, preset, seed), **point, "preset": preset, "seed": seed, "status": status,
+            "mfr": 0.4, "pd": 0.35, "regime": "normal", "flagged": False, "flag_reason": "", "reason": "", "cpu_time": cpu}
+
+
+def test_the_finished_table_holds_the_finished_cases_in_plan_order(config, tmp_path):
+    cfg = copy.deepcopy(config)
+    cfg["sweeps"] = {"lds": {"seed": 42, "partitions": [6]}, "lattice": {"k": [2, 3]}}
+    plan = planned_sweeps(cfg)
+    finished = [plan["lds"][i] for i in (4, 1, 5)] + [plan["lattice"][0], plan["lattice"][17]]
+    for cid, _ in finished:
+        parts = dict(re.findall(r"-([fdhv])([0-9.]+)", cid))
+        point = {"f": float(parts["f"]), "d_um": float(parts["d"]), "h_um": float(parts["h"]),
+                 "v_mm_s": float(parts["v"])}
+        case = tmp_path / "results" / "cases" / cid
+        case.mkdir(parents=True, exist_ok=True)
+        status = "failed" if cid == plan["lds"][5][0] else "ok"
+        (case / "metrics.json").write_text(json.dumps(_metrics(point, "default", 1, status, cpu=3600.0)))
+        (case / "benchmark.tsv").write_text("s\th:m:s\tmax_rss\n10\t0:00:10\t200\n")
+    lds = finished_table(tmp_path, plan["lds"])
+    assert list(lds["index"]) == [1, 4, 5]
+    assert list(lds["case_id"]) == [plan["lds"][i][0] for i in (1, 4, 5)]
+    lattice = finished_table(tmp_path, plan["lattice"])
+    # lattice point 0 of k=2 (all minima) is also point 0 of k=3: one case, two rows
+    assert plan["lattice"][16][0] == plan["lattice"][0][0]
+    assert list(lattice["index"]) == [0, 16, 17] and list(lattice["k"]) == [2, 3, 3]
+    done = progress(plan, {"lds": lds, "lattice": lattice}).set_index("sweep")
+    assert done.loc["lds"].to_dict() == {"planned": 6, "finished": 3, "ok": 2, "failed": 1, "cpu_hours": 3.0}
+    assert done.loc["lattice", "planned"] == 16 + 81 - 16 and done.loc["lattice", "finished"] == 2
+    assert done.loc["lattice", "cpu_hours"] == 2.0  # the shared case counted once
+
+
+@pytest.fixture(scope="module")
+def published():
+    assert (DOCS / "config.yaml").exists(), "docs/study is published (tools/publish_study.py)"
+    cfg = spreadmap_config.load(DOCS / "config.yaml")
+    return cfg, planned_sweeps(cfg)
+
+
+def test_published_cases_are_planned_cases_as_simulated(published):
+    cfg, plan = published
+    for name, cases in plan.items():
+        table = pd.read_csv(DOCS / f"cases_{name}.csv")
+        labels = {cid: label for cid, label in cases} if name == "lds" else None
+        planned = {cid for cid, _ in cases}
+        assert set(table["case_id"]) <= planned, name
+        assert list(table["index"]) == sorted(table["index"]), name
+        if labels:
+            assert all(labels[c] == {"sweep": "lds", "index": i} for c, i in zip(table["case_id"], table["index"]))
+        # the design point each case simulated is the planned point (to the case id's rounding)
+        ids = [case_id(r, r["preset"], r["seed"]) for r in table.to_dict("records")]
+        assert ids == list(table["case_id"]), name
+        assert set(table["status"]) <= {"ok", "failed"}
+
+
+def test_published_progress_recomputes(published):
+    cfg, plan = published
+    tables = {name: pd.read_csv(DOCS / f"cases_{name}.csv") for name in plan}
+    computed = progress(plan, tables)
+    stored = pd.read_csv(DOCS / "progress.csv")
+    assert list(stored["sweep"]) == list(computed["sweep"])
+    for column in ("planned", "finished", "ok", "failed"):
+        assert list(stored[column]) == list(computed[column]), column
+    np.testing.assert_allclose(stored["cpu_hours"], computed["cpu_hours"], atol=1e-3)

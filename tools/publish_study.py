@@ -1,0 +1,71 @@
+#!/usr/bin/env python
+"""Publish the study (issue 17) from a workflow directory into docs/study/, as far as it has run.
+
+    .venv/bin/python tools/publish_study.py WORKFLOW_DIR [--out docs/study]
+
+Writes the cases tables of the sweeps its config plans (cases_lds.csv, cases_lattice.csv: every
+finished case, in plan order, with the workflow's labels), progress.csv (per sweep: planned,
+finished, failed, CPU hours), the config it ran with, and copies the analyses that exist (the
+sweeps' convergence, the converge run's table and stopping path, the surrogate, the maps, the
+held-out points' table); what does not exist yet is listed. A later session grows the same
+workflow directory (Snakemake re-uses every finished case) and publishes again.
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from spreadmap import config as cfgmod  # noqa: E402
+from spreadmap.study_cases import finished_table, planned_sweeps, progress  # noqa: E402
+from spreadmap.table import write_table  # noqa: E402
+
+COPIES = {  # source under the workflow directory -> destination under --out
+    "results/convergence": "convergence",
+    "results/converge/summary.txt": "converge/summary.txt",
+    "results/converge/stopped.json": "converge/stopped.json",
+    "results/converge/path.png": "converge/path.png",
+    "results/converge/table.csv": "cases_converge.csv",
+    "results/surrogate": "surrogate",
+    "results/maps": "maps",
+    "results/tables/points.csv": "cases_heldout.csv",
+}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("workdir", type=Path)
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "study")
+    args = ap.parse_args(argv)
+    config = cfgmod.load(args.workdir / "config.yaml")
+    args.out.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(args.workdir / "config.yaml", args.out / "config.yaml")
+    plan = planned_sweeps(config)
+    tables = {name: finished_table(args.workdir, cases) for name, cases in plan.items()}
+    for name, table in tables.items():
+        write_table(table, args.out / f"cases_{name}.csv")
+    done = progress(plan, tables)
+    write_table(done, args.out / "progress.csv")
+    print(done.to_string(index=False))
+    missing = []
+    for source, target in COPIES.items():
+        src, dst = args.workdir / source, args.out / target
+        if not src.exists():
+            missing.append(source)
+            continue
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        if src.is_dir():
+            shutil.copytree(src, dst, dirs_exist_ok=True)
+        else:
+            shutil.copyfile(src, dst)
+    if missing:
+        print("not yet run:", ", ".join(missing))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
