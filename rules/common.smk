@@ -18,6 +18,7 @@ except spreadmap_config.ConfigError as error:
     raise WorkflowError(f"spreadmap: bad configuration: {error}") from None
 
 RETRIES = 1  # a crash or a timeout is tried once more, then recorded as failed (a refusal: at once)
+QUICK_FIRST = 10**8  # scheduling priority of the per-case jobs that take a second (render, metrics); above any run's
 CASES = {}  # case id -> scene parameters of the YADE script
 SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list of (case id, label)
 RANGES = config.get("ranges")
@@ -36,6 +37,14 @@ def add_case(point, preset=None, seed=None):
         except (UnsafeTimeStep, ValueError) as error:
             raise WorkflowError(f"spreadmap: case refused before anything ran: {error}") from None
     return cid
+
+
+def case_cost_priority(wildcards):
+    """Scheduling priority of a case's YADE run: its planned work (spheres x planned steps, in
+    10^4), so that the costliest cases start first (longest-processing-time order) and a few
+    slow cases do not run alone at the end of a sweep or a batch while the other cores idle."""
+    scene = CASES[wildcards.case]
+    return 1 + int(scene["n_particles"] * scene["estimated_steps"] / 1e4)
 
 
 def register(set_name, point, label, preset=None, seed=None):

@@ -11,6 +11,7 @@ rule case_metrics:
     log:
         "results/cases/{case}/metrics.log",
     localrule: True
+    priority: QUICK_FIRST
     conda:
         "../envs/analysis.yaml"
     script:

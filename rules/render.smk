@@ -7,6 +7,7 @@ rule render_case:
     log:
         "results/cases/{case}/render.log",
     localrule: True
+    priority: QUICK_FIRST
     conda:
         "../envs/analysis.yaml"
     script:

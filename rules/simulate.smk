@@ -12,6 +12,7 @@ rule run_case:
         scene=lambda wc: CASES[wc.case],
         retries=RETRIES,
     retries: RETRIES
+    priority: case_cost_priority
     threads: 1
     resources:
         attempt=lambda wc, attempt: attempt,

@@ -108,3 +108,33 @@ def test_killed_run_resumes_without_redoing_finished_cases(tmp_path):
     reused = [line for line in done if "re-used the finished simulation" in line]
     assert len(done) == dry["run_case"]
     assert len(done) - len(reused) == 5 - len(finished)
+
+
+def test_the_costliest_cases_start_first(tmp_path):
+    """Longest-processing-time order: on one core the YADE runs start in decreasing planned work
+    (spheres x planned steps), whatever order the points are listed in (here cheapest first), and
+    every render comes before the first run."""
+    import re
+
+    from spreadmap import config as spreadmap_config
+    from spreadmap.cases import case_id
+    from spreadmap.scene import scene_parameters
+
+    points = {f"p{i}": {"f": 0.3, "d_um": d, "h_um": 75, "v_mm_s": 10} for i, d in enumerate((50, 45, 40, 35))}
+    cfg = copy.deepcopy(FAST_SWEEP)
+    cfg["points"] = {"preset": "smoke", "named": points}
+    wf = make_workflow(tmp_path, cfg, DROP)
+    config = spreadmap_config.load(wf / "config.yaml")
+    work = {}
+    for point in points.values():
+        scene = scene_parameters(point, "smoke", config, "x", 1)
+        work[case_id(point, "smoke", 1)] = scene["n_particles"] * scene["estimated_steps"]
+    assert len(set(work.values())) == 4
+    run = snakemake(wf, "points", "--cores", "1")
+    assert run.returncode == 0, run.stderr[-3000:]
+    log = run.stdout + run.stderr
+    jobs = re.findall(r"rule (\w+):\n(?:.*\n)*?\s+wildcards: case=(\S+)", log)
+    order = [case for rule, case in jobs if rule == "run_case"]
+    assert order == sorted(work, key=work.get, reverse=True), (order, work)
+    renders = [i for i, (rule, _) in enumerate(jobs) if rule == "render_case"]
+    assert max(renders) < min(i for i, (rule, _) in enumerate(jobs) if rule == "run_case")
