@@ -107,3 +107,43 @@ def test_converge_stops_early_when_the_criterion_holds_at_once(finished_run):
     assert run.returncode == 0, (run.stdout + run.stderr)[-3000:]
     stopped = json.loads((finished_run / "results" / "converge" / "stopped.json").read_text())
     assert stopped["reason"] == "criteria met" and stopped["n"] < 12
+
+
+def test_the_study_publishes_and_answers_from_a_finished_run(finished_run, tmp_path):
+    """tools/publish_study.py on a run with the main job and the sweeps: its cases tables are the
+    workflow's own (the same cases and results), and summary.md answers every question from them."""
+    import subprocess
+    import sys
+
+    import pandas as pd
+
+    from conftest import ROOT
+    from spreadmap.study_summary import NOT_YET
+
+    out = tmp_path / "study"
+    run = subprocess.run([sys.executable, str(ROOT / "tools" / "publish_study.py"), str(finished_run), "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    for name in ("lds", "lattice"):
+        ours = pd.read_csv(out / f"cases_{name}.csv")
+        theirs = pd.read_csv(finished_run / "results" / "tables" / f"{name}.csv")
+        assert list(ours["case_id"]) == list(theirs["case_id"]), name
+        assert list(ours["mfr"]) == list(theirs["mfr"]), name
+    text = (out / "summary.md").read_text()
+    assert NOT_YET not in text, text
+    assert "- lds: 12 of 12 cases finished" in text and "- lattice: 16 of 16 cases finished" in text
+    assert "The main job's loop: the map criteria" in text
+    assert "The study's rule (five statistics within 0.5 %), lds:" in text
+    assert "The study's rule (five statistics within 0.5 %), lattice:" in text
+    for target in ("mfr", "pd"):
+        assert re.search(rf"- {target} \(gp, the maps\): CV RMSE [0-9.]+ \(interval", text), target
+        assert f"The study's MLP protocol, {target}: R^2" in text
+        assert re.search(rf"- {target}: (d_um|h_um|f|v_mm_s) [0-9.]+ \(", text), target
+        for variable in ("v_mm_s", "f", "h_over_d"):
+            assert f"- {target} vs {variable}: " in text, (target, variable)
+    for variable in ("v_mm_s", "f", "h_over_d"):
+        trend = pd.read_csv(out / f"trend_{variable}.csv").dropna(subset=["mfr"])  # h/d levels with no points: NaN
+        assert len(trend) >= 3, variable
+        assert ((trend["mfr_low"] <= trend["mfr"]) & (trend["mfr"] <= trend["mfr_high"])).all()
+        assert (trend["mfr_high"] > trend["mfr_low"]).any()  # a trained model is unsure somewhere
+    assert re.search(r"- normal: \d+ of \d+ cases; h/d", text)

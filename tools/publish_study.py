@@ -7,7 +7,8 @@ Writes the cases tables of the sweeps its config plans (cases_lds.csv, cases_lat
 finished case, in plan order, with the workflow's labels), progress.csv (per sweep: planned,
 finished, failed, CPU hours), the config it ran with, and copies the analyses that exist (the
 sweeps' convergence, the converge run's table and stopping path, the surrogate, the maps, the
-held-out points' table); what does not exist yet is listed. A later session grows the same
+held-out points' table); what does not exist yet is listed. Then summary.md (and the trends'
+tables trend_*.csv) from what is there (spreadmap.study_summary). A later session grows the same
 workflow directory (Snakemake re-uses every finished case) and publishes again.
 """
 from __future__ import annotations
@@ -22,6 +23,7 @@ sys.path.insert(0, str(ROOT))
 
 from spreadmap import config as cfgmod  # noqa: E402
 from spreadmap.study_cases import finished_table, planned_sweeps, progress  # noqa: E402
+from spreadmap.study_summary import summary_markdown  # noqa: E402
 from spreadmap.table import write_table  # noqa: E402
 
 COPIES = {  # source under the workflow directory -> destination under --out
@@ -64,6 +66,9 @@ def main(argv=None) -> int:
             shutil.copyfile(src, dst)
     if missing:
         print("not yet run:", ", ".join(missing))
+    text = summary_markdown(args.out, config.get("ranges"))
+    (args.out / "summary.md").write_text(text)
+    print(text)
     return 0
 
 

@@ -1,0 +1,169 @@
+"""docs/study/summary.md: the study's questions answered from its published files, each number
+with its interval, and "not yet" where a part has not run.
+
+Reads (all optional): progress.csv, converge/stopped.json, convergence/summary.json,
+surrogate/surrogate_metrics.csv, surrogate/surrogate_r2_vs_neurons.csv,
+maps/sensitivity_ranking_table.csv, surrogate/model.joblib (the trends) and the cases tables
+(the regimes).
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.stats import qmc
+
+from spreadmap.design import NAMES, bounds
+
+NOT_YET = "not yet run"
+
+
+def main_effect(model, ranges: dict | None, variable: str, levels, n_base: int = 64, n_draws: int = 64,
+                seed: int = 0) -> pd.DataFrame:
+    """Partial dependence of each target on `variable` ("f", "v_mm_s" or "h_over_d"): at each level
+    the mean prediction over a scrambled Sobol' sample of the other parameters, with a 95 % band
+    from the model's draws of the mean function (the same draw for every point of a level). For
+    h/d the sample's d sets h = level x d, and only points whose h lies in its range count
+    (`n_points`): an effect over the part of the design space where that h/d exists."""
+    low, high = bounds(ranges)
+    base = qmc.scale(qmc.Sobol(d=len(NAMES), scramble=True, seed=seed).random(n_base), low, high)
+    i_h, i_d = NAMES.index("h_um"), NAMES.index("d_um")
+    rows = []
+    for level in levels:
+        X = base.copy()
+        if variable == "h_over_d":
+            X[:, i_h] = level * X[:, i_d]
+            X = X[(X[:, i_h] >= low[i_h]) & (X[:, i_h] <= high[i_h])]
+        else:
+            X[:, NAMES.index(variable)] = level
+        row = {"variable": variable, "level": float(level), "n_points": len(X)}
+        if len(X):
+            for target, draws in model.draws(X, n_draws, seed=seed).items():
+                averages = np.asarray(draws).mean(axis=1)
+                row[target] = float(averages.mean())
+                row[f"{target}_low"], row[f"{target}_high"] = (float(q) for q in np.quantile(averages, [0.025, 0.975]))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _read_csv(path: Path) -> pd.DataFrame | None:
+    return pd.read_csv(path) if path.exists() else None
+
+
+def _cases(study: Path) -> list[str]:
+    lines = ["## Cases and CPU"]
+    progress = _read_csv(study / "progress.csv")
+    if progress is None:
+        return lines + [NOT_YET]
+    for r in progress.to_dict("records"):
+        lines.append(f"- {r['sweep']}: {r['finished']} of {r['planned']} cases finished ({r['failed']} failed), "
+                     f"{r['cpu_hours']:.2f} CPU hours")
+    return lines
+
+
+def _convergence(study: Path) -> list[str]:
+    lines = ["## How many cases convergence took"]
+    stopped = study / "converge" / "stopped.json"
+    if stopped.exists():
+        s = json.loads(stopped.read_text())
+        verdict = (f"the map criteria held at **{s['n']} cases**" if s["criteria"].get("criteria_met")
+                   else f"the map criteria **did not hold within {s['n']} cases** (stopped: {s['reason']})")
+        lines.append(f"- The main job's loop: {verdict}; {s['usable']} usable, {s['cpu_hours']:.2f} CPU hours.")
+    else:
+        lines.append(f"- The main job's loop: {NOT_YET}.")
+    rule = study / "convergence" / "summary.json"
+    if rule.exists():
+        r = json.loads(rule.read_text())
+        for name, v in r["sweeps"].items():
+            lines.append(f"- The study's rule (five statistics within {100 * r['tolerance']:g} %), {name}: "
+                         f"{v['status']} ({v['cases_run']} cases run).")
+        for key, ratio in r.items():
+            if key.startswith("ratio_") and isinstance(ratio, dict):
+                lines.append(f"- {ratio.get('text', '')}")
+    else:
+        lines.append(f"- The study's rule on the sweeps: {NOT_YET}.")
+    return lines
+
+
+def _surrogate(study: Path) -> list[str]:
+    lines = ["## The surrogate against the noise"]
+    metrics = _read_csv(study / "surrogate" / "surrogate_metrics.csv")
+    if metrics is None:
+        return lines + [NOT_YET]
+    for r in metrics.to_dict("records"):
+        lines.append(f"- {r['target']} ({r['model']}{', the maps' if r.get('map_model') else ''}): CV RMSE "
+                     f"{r['rmse']:.4f} (interval {r['rmse_low']:.4f}-{r['rmse_high']:.4f}) = {r['rmse_over_noise']:.2f}x "
+                     f"the noise SD {r['noise_sd']:.4f}; {100 * r['level']:g} % intervals cover "
+                     f"{100 * r['coverage']:.0f} % ({100 * r['coverage_low']:.0f}-{100 * r['coverage_high']:.0f} %) "
+                     f"of {r['n_predictions']} predictions of {r['n_cases']} cases")
+    mlp = _read_csv(study / "surrogate" / "surrogate_r2_vs_neurons.csv")
+    if mlp is not None:
+        for r in mlp[mlp["chosen"]].to_dict("records"):
+            lines.append(f"- The study's MLP protocol, {r['target']}: R^2 {r['r2_mean']:.2f} on its 20 % test share "
+                         f"(range {r['r2_min']:.2f} to {r['r2_max']:.2f} over {r['n_seeds']} seeds) at {r['neurons']} "
+                         f"neurons, trained on {r['n_train']} cases (train R^2 {r['r2_train_mean']:.2f})")
+    return lines
+
+
+def _ranking(study: Path) -> list[str]:
+    lines = ["## Which parameters matter (Sobol' total indices: of the surrogate's mean, with the 95 % interval "
+             "over its draws; ranks from the intervals)"]
+    table = _read_csv(study / "maps" / "sensitivity_ranking_table.csv")
+    if table is None:
+        return lines + [NOT_YET]
+    for target, t in table.groupby("target", sort=False):
+        t = t.sort_values("ST", ascending=False)
+        parts = [f"{r['parameter']} {r['ST']:.2f} ({r['ST_low']:.2f}-{r['ST_high']:.2f}, rank {r['rank_ST']})"
+                 for r in t.to_dict("records")]
+        tied = sorted({r["rank_ST"] for r in t.to_dict("records") if "-" in str(r["rank_ST"])})
+        note = f"; intervals do not separate the ranks {', '.join(tied)}" if tied else ""
+        lines.append(f"- {target}: " + ", ".join(parts) + note)
+    return lines
+
+
+def _trends(study: Path, ranges: dict | None) -> list[str]:
+    lines = ["## How the targets change with blade speed, h/d and friction (partial dependence, 95 % bands)"]
+    path = study / "surrogate" / "model.joblib"
+    if not path.exists():
+        return lines + [NOT_YET]
+    from spreadmap.surrogate.saved_model import load_model
+
+    model = load_model(path)
+    low, high = bounds(ranges)
+    grids = {"v_mm_s": np.linspace(low[NAMES.index("v_mm_s")], high[NAMES.index("v_mm_s")], 5),
+             "f": np.linspace(low[NAMES.index("f")], high[NAMES.index("f")], 5),
+             "h_over_d": np.geomspace(low[NAMES.index("h_um")] / high[NAMES.index("d_um")],
+                                      high[NAMES.index("h_um")] / low[NAMES.index("d_um")], 6)}
+    for variable, levels in grids.items():
+        effect = main_effect(model, ranges, variable, levels)
+        effect.to_csv(study / f"trend_{variable}.csv", index=False)
+        for target in model.targets:
+            ends = effect.dropna(subset=[target]).iloc[[0, -1]]
+            a, b = ends.to_dict("records")
+            lines.append(f"- {target} vs {variable}: {a[target]:.3f} ({a[target + '_low']:.3f}-{a[target + '_high']:.3f}) "
+                         f"at {a['level']:.3g} to {b[target]:.3f} ({b[target + '_low']:.3f}-{b[target + '_high']:.3f}) "
+                         f"at {b['level']:.3g}")
+    return lines
+
+
+def _regimes(study: Path) -> list[str]:
+    lines = ["## Where the regimes lie (the cases run)"]
+    tables = [t for t in (_read_csv(study / f"cases_{n}.csv") for n in ("lds", "lattice", "converge")) if t is not None]
+    if not tables:
+        return lines + [NOT_YET]
+    cases = pd.concat(tables).drop_duplicates("case_id")
+    cases = cases[cases["status"] == "ok"]
+    cases = cases.assign(h_over_d=cases["h_um"] / cases["d_um"])
+    for regime, group in cases.groupby("regime"):
+        lines.append(f"- {regime}: {len(group)} of {len(cases)} cases; h/d {group['h_over_d'].min():.2f}-"
+                     f"{group['h_over_d'].max():.2f}, v {group['v_mm_s'].min():.1f}-{group['v_mm_s'].max():.1f} mm/s")
+    return lines
+
+
+def summary_markdown(study: Path | str, ranges: dict | None = None) -> str:
+    study = Path(study)
+    sections = [_cases(study), _convergence(study), _surrogate(study), _ranking(study), _trends(study, ranges),
+                _regimes(study)]
+    return "# The study: what the data say\n\n" + "\n\n".join("\n".join(s) for s in sections) + "\n"

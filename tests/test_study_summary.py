@@ -1,0 +1,62 @@
+"""The study's summary (spreadmap.study_summary): partial dependence against functions of known
+effect, and the answers it writes from a study folder's files (analysis code: synthetic inputs)."""
+import json
+
+import numpy as np
+import pandas as pd
+
+from spreadmap.design import NAMES
+from spreadmap.sensitivity.draws import FunctionDraws
+from spreadmap.study_summary import NOT_YET, main_effect, summary_markdown
+
+RANGES = {"f": {"min": 0.15, "max": 0.45}, "d_um": {"min": 10, "max": 50}, "h_um": {"min": 55, "max": 75},
+          "v_mm_s": {"min": 5, "max": 15}}
+F, D, H, V = (NAMES.index(n) for n in ("f", "d_um", "h_um", "v_mm_s"))
+
+
+def known(X):
+    """mfr: linear in v plus a friction term that averages to zero over f's range; pd: 0.05 h/d."""
+    mfr = 0.02 * X[:, V] + 0.1 * np.sin(2 * np.pi * (X[:, F] - 0.15) / 0.30)
+    return np.column_stack([mfr, 0.05 * X[:, H] / X[:, D]])
+
+
+def test_partial_dependence_recovers_known_effects():
+    model = FunctionDraws(known, ("mfr", "pd"))
+    v = main_effect(model, RANGES, "v_mm_s", [5, 10, 15], n_base=256)
+    np.testing.assert_allclose(v["mfr"], [0.1, 0.2, 0.3], atol=2e-3)  # the sine averages out
+    hd = main_effect(model, RANGES, "h_over_d", [1.2, 3.0, 7.0], n_base=256)
+    np.testing.assert_allclose(hd["pd"], [0.06, 0.15, 0.35], rtol=1e-12)  # h = level x d exactly
+    # the points where h = level x d lies in [55, 75] um: d in [55 / level, 75 / level] within [10, 50]
+    for level, n in zip(hd["level"], hd["n_points"]):
+        share = (min(50, 75 / level) - max(10, 55 / level)) / 40
+        assert abs(n / 256 - share) < 0.03, (level, n, share)
+    f = main_effect(model, RANGES, "f", [0.15, 0.225, 0.30])
+    np.testing.assert_allclose(f["mfr"] - f["mfr"].iloc[0], [0.0, 0.1, 0.0], atol=1e-9)  # sin(0), sin(pi/2), sin(pi)
+    # a known function has no model uncertainty: the band collapses onto the effect
+    np.testing.assert_allclose(f["mfr_low"], f["mfr"], atol=1e-12)
+    np.testing.assert_allclose(f["mfr_high"], f["mfr"], atol=1e-12)
+
+
+def test_the_summary_answers_from_the_files_and_says_what_has_not_run(tmp_path):
+    pd.DataFrame([{"sweep": "lds", "planned": 81, "finished": 40, "ok": 39, "failed": 1, "cpu_hours": 1.25}]).to_csv(
+        tmp_path / "progress.csv", index=False)
+    (tmp_path / "converge").mkdir()
+    (tmp_path / "converge" / "stopped.json").write_text(json.dumps(
+        {"n": 96, "usable": 90, "cpu_hours": 3.5, "reason": "all criteria held", "criteria": {"criteria_met": True}}))
+    (tmp_path / "maps").mkdir()
+    pd.DataFrame([{"target": "mfr", "parameter": "d_um", "ST": 0.8, "ST_low": 0.7, "ST_high": 0.9, "rank_ST": "1"},
+                  {"target": "mfr", "parameter": "v_mm_s", "ST": 0.1, "ST_low": 0.02, "ST_high": 0.2, "rank_ST": "2-3"},
+                  {"target": "mfr", "parameter": "f", "ST": 0.12, "ST_low": 0.05, "ST_high": 0.2, "rank_ST": "2-3"}]
+                 ).to_csv(tmp_path / "maps" / "sensitivity_ranking_table.csv", index=False)
+    pd.DataFrame([{"case_id": f"c{i}", "status": "ok", "regime": r, "h_um": 55.0, "d_um": d, "v_mm_s": v}
+                  for i, (r, d, v) in enumerate([("jamming", 50, 5), ("jamming", 45, 6), ("normal", 20, 10)])]
+                 ).to_csv(tmp_path / "cases_lds.csv", index=False)
+    text = summary_markdown(tmp_path, RANGES)
+    assert "lds: 40 of 81 cases finished (1 failed), 1.25 CPU hours" in text
+    assert "the map criteria held at **96 cases**" in text
+    assert "The study's rule on the sweeps: " + NOT_YET in text
+    mfr = next(line for line in text.splitlines() if line.startswith("- mfr: d_um"))
+    assert mfr.index("f 0.12") < mfr.index("v_mm_s 0.10")  # ordered by the total index
+    assert "do not separate the ranks 2-3" in mfr
+    assert "- jamming: 2 of 3 cases; h/d 1.10-1.22, v 5.0-6.0 mm/s" in text
+    assert text.count(NOT_YET) == 3  # the rule, the surrogate's metrics, the trends
