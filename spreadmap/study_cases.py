@@ -51,11 +51,10 @@ def progress(planned: dict[str, list[tuple[str, dict]]], tables: dict[str, pd.Da
     rows = []
     for name, plan in planned.items():
         table = tables[name]
-        unique = table.drop_duplicates("case_id") if "case_id" in table else table
+        unique = table.drop_duplicates("case_id") if "case_id" in table else table  # a case shared by two lattices ran once
         status = unique["status"] if "status" in unique else pd.Series(dtype=str)
-        # a case shared by two lattices ran once
-        cpu = table.drop_duplicates("case_id")["cpu_time"].sum() / 3600.0 if "cpu_time" in table else 0.0
-        rows.append({"sweep": name, "planned": len({cid for cid, _ in plan}), "finished": int(table["case_id"].nunique())
-                     if "case_id" in table else 0, "ok": int((status == "ok").sum()),
-                     "failed": int((status != "ok").sum()), "cpu_hours": round(float(cpu), 3)})
+        cpu = unique["cpu_time"].sum() / 3600.0 if "cpu_time" in unique else 0.0
+        rows.append({"sweep": name, "planned": len({cid for cid, _ in plan}), "finished": len(unique) if "case_id" in table else 0,
+                     "ok": int((status == "ok").sum()), "failed": int((status != "ok").sum()),
+                     "cpu_hours": round(float(cpu), 3)})
     return pd.DataFrame(rows)
