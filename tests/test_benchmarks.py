@@ -155,3 +155,15 @@ def test_layer_metrics_on_a_constructed_record(tmp_path):
     out = pd.read_csv(tmp_path / "out.csv")
     assert np.allclose(out["mfr"], np.pi / 6) and np.allclose(out["mfr_centres"], np.pi / 6)
     assert "layer_packing x thickness_ratio / PD: 1.00" in r.stdout and (out["regime"] == "normal").all()
+
+
+def test_schedule_order_prints_the_known_makespans(tmp_path):
+    """One 600 s case and ten of 60 s on 2 cores: the costliest first finishes at 600 s, the lower
+    bound (10.0 min); a random order that starts the long case last can take up to 300 + 600 s."""
+    table = tmp_path / "cases.csv"
+    pd.DataFrame({"cpu_time": [60.0] * 10 + [600.0]}).to_csv(table, index=False)
+    r = run("schedule_order.py", table, "--cores", "2", "--orders", "500")
+    assert r.returncode == 0, r.stderr
+    assert "costliest first: 10.0 min (lower bound 10.0)" in r.stdout
+    worst = float(re.search(r"worst ([0-9.]+)", r.stdout).group(1))
+    assert 10.0 < worst <= 15.0
