@@ -8,9 +8,10 @@ from spreadmap import config as spreadmap_config
 from spreadmap.cases import CASE_ID_PATTERN, case_id, rounded
 from spreadmap.design import NAMES
 from spreadmap.fidelity_plan import knob_cases, knob_presets, preset_cases
-from spreadmap.sampling import chosen_points, halton, lattice
+from spreadmap.sampling import chosen_points
 from spreadmap.render import template_sha256
 from spreadmap.scene import UnsafeTimeStep, scene_parameters
+from spreadmap.study_cases import planned_cases
 
 try:
     spreadmap_config.validate(config)
@@ -64,19 +65,11 @@ def lds_case_ids(n):
 
 
 LDS_SEQUENCE = []  # case ids of the LDS sequence up to the larger of the sweep and the converge budget
-if "lds" in SWEEPS:
-    _n = max(lds_size(), (config.get("converge") or {}).get("budget", 0))
-    for _row in halton(_n, SWEEPS["lds"]["seed"], RANGES).to_dict("records"):
-        LDS_SEQUENCE.append(add_case(_row, preset=SWEEPS["lds"].get("preset")))
-        if _row["index"] < lds_size():
-            register("lds", _row, {"index": int(_row["index"])}, preset=SWEEPS["lds"].get("preset"))
-if "lattice" in SWEEPS:
-    _n = 0
-    for _k in sorted(set(SWEEPS["lattice"]["k"])):
-        for _row in lattice(_k, RANGES).to_dict("records"):
-            register("lattice", _row, {"index": _n, "k": _k, "index_in_lattice": int(_row["index"])},
-                     preset=SWEEPS["lattice"].get("preset"))
-            _n += 1
+for _case in planned_cases(config, lds_points=(config.get("converge") or {}).get("budget", 0)):
+    if _case.sweep == "lds":
+        LDS_SEQUENCE.append(add_case(_case.point, preset=_case.preset))
+    if _case.in_sweep:
+        register(_case.sweep, _case.point, _case.label, preset=_case.preset)
 try:
     _points = chosen_points(config.get("points"), workflow.basedir)
 except ValueError as error:

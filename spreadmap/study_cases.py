@@ -1,13 +1,15 @@
 """The study's sweeps as planned by a configuration, and the table of the cases of a workflow
 directory that have finished so far (docs/study is published from it while the study grows).
 
-The plan is the one rules/common.smk registers: the first max(partitions) points of the seeded
-scrambled-Halton sequence (`lds`), and the k^4 lattice of each k (`lattice`), at the sweep's
-preset (or the config's) and the scene's packing seed; the same labels as the workflow's tables.
+The plan (planned_cases) is the one rules/common.smk registers: the first max(partitions) points of
+the seeded scrambled-Halton sequence (`lds`), and the k^4 lattice of each k (`lattice`), at the
+sweep's preset (or the config's) and the scene's packing seed; the same labels as the workflow's tables.
 """
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
+from typing import NamedTuple
 
 import pandas as pd
 
@@ -16,24 +18,41 @@ from spreadmap.sampling import halton, lattice
 from spreadmap.table import build_table
 
 
-def planned_sweeps(config: dict) -> dict[str, list[tuple[str, dict]]]:
-    """{"lds": [(case id, label)], "lattice": [...]} for the sweeps the config has."""
+class PlannedCase(NamedTuple):
+    """A case of a sweep as the workflow registers it."""
+    sweep: str  # "lds" or "lattice"
+    point: dict  # the design point: a row of spreadmap.sampling.halton or lattice, with its "index"
+    preset: str | None  # the sweep's preset; None: the config's
+    label: dict  # its label in the sweep's table, without "sweep" (the workflow's register() adds it)
+    case_id: str
+    in_sweep: bool  # False for an LDS point past the sweep (there for the converge budget)
+
+
+def planned_cases(config: dict, lds_points: int = 0) -> Iterator[PlannedCase]:
+    """The cases of the config's sweeps in the workflow's order: the LDS sequence up to the larger of
+    its sweep and `lds_points` (the workflow's converge.budget), then the lattices by increasing k
+    (a case shared by two lattices comes under each)."""
     sweeps = config.get("sweeps") or {}
     ranges, seed = config.get("ranges"), config["scene"]["seed"]
-    plan: dict[str, list[tuple[str, dict]]] = {}
     if "lds" in sweeps:
-        preset = sweeps["lds"].get("preset") or config["preset"]
-        table = halton(max(sweeps["lds"]["partitions"]), sweeps["lds"]["seed"], ranges)
-        plan["lds"] = [(case_id(row, preset, seed), {"sweep": "lds", "index": int(row["index"])})
-                       for row in table.to_dict("records")]
+        preset, size = sweeps["lds"].get("preset"), max(sweeps["lds"]["partitions"])
+        for row in halton(max(size, lds_points), sweeps["lds"]["seed"], ranges).to_dict("records"):
+            yield PlannedCase("lds", row, preset, {"index": int(row["index"])},
+                              case_id(row, preset or config["preset"], seed), int(row["index"]) < size)
     if "lattice" in sweeps:
-        preset = sweeps["lattice"].get("preset") or config["preset"]
-        plan["lattice"], n = [], 0
-        for k in sorted(set(sweeps["lattice"]["k"])):
-            for row in lattice(k, ranges).to_dict("records"):
-                plan["lattice"].append((case_id(row, preset, seed),
-                                        {"sweep": "lattice", "index": n, "k": k, "index_in_lattice": int(row["index"])}))
-                n += 1
+        preset = sweeps["lattice"].get("preset")
+        rows = [(k, row) for k in sorted(set(sweeps["lattice"]["k"])) for row in lattice(k, ranges).to_dict("records")]
+        for n, (k, row) in enumerate(rows):
+            yield PlannedCase("lattice", row, preset, {"index": n, "k": k, "index_in_lattice": int(row["index"])},
+                              case_id(row, preset or config["preset"], seed), True)
+
+
+def planned_sweeps(config: dict) -> dict[str, list[tuple[str, dict]]]:
+    """{"lds": [(case id, label)], "lattice": [...]} for the sweeps the config has, with the labels
+    of the workflow's tables."""
+    plan = {name: [] for name in ("lds", "lattice") if name in (config.get("sweeps") or {})}
+    for case in planned_cases(config):
+        plan[case.sweep].append((case.case_id, {"sweep": case.sweep, **case.label}))
     return plan
 
 

@@ -11,14 +11,14 @@ import pytest
 from conftest import ROOT, make_workflow, snakemake
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import case_id
-from spreadmap.study_cases import finished_table, planned_sweeps, progress
+from spreadmap.study_cases import finished_table, planned_cases, planned_sweeps, progress
 
 DOCS = ROOT / "docs" / "study"
 
 
 def test_the_plan_is_the_workflows_plan(tmp_path):
-    """The case ids the workflow's dry run would render for the sweeps (its own registry in
-    rules/common.smk) are the planned ones, LDS and two lattices sharing their corners."""
+    """The case ids the workflow's dry run would render for the sweeps (its registry in
+    rules/common.smk, from planned_cases) are the planned ones, LDS and two lattices sharing their corners."""
     sweeps = {"lds": {"seed": 42, "partitions": [4, 9]}, "lattice": {"k": [2, 3]}}
     wf = make_workflow(tmp_path, {"sweeps": sweeps})
     plan = planned_sweeps(spreadmap_config.load(wf / "config.yaml"))
@@ -32,6 +32,24 @@ def test_the_plan_is_the_workflows_plan(tmp_path):
     assert ran["lds"] == {cid for cid, _ in plan["lds"]}
     assert ran["lattice"] == {cid for cid, _ in plan["lattice"]}
     assert len(ran["lattice"]) == 81 + 16 - 2 ** 4  # the lattices share their 16 corners
+
+
+def test_planned_cases_go_past_the_lds_sweep_for_the_converge_budget(config):
+    """LDS points past the sweep are planned (for converge.budget) but not in the sweep; the sweep's
+    points come first, as in planned_sweeps, and the lattices follow."""
+    cfg = copy.deepcopy(config)
+    cfg["sweeps"] = {"lds": {"seed": 42, "partitions": [4, 6], "preset": "smoke"}, "lattice": {"k": [2]}}
+    cases = list(planned_cases(cfg, lds_points=10))
+    lds = [c for c in cases if c.sweep == "lds"]
+    assert [c.label for c in lds] == [{"index": i} for i in range(10)]
+    assert [c.in_sweep for c in lds] == [True] * 6 + [False] * 4
+    assert [c.sweep for c in cases] == ["lds"] * 10 + ["lattice"] * 16
+    assert all(c.preset == "smoke" and c.point["index"] == c.label["index"] for c in lds)
+    assert all(c.case_id == case_id(c.point, c.preset or cfg["preset"], cfg["scene"]["seed"]) for c in cases)
+    plan = planned_sweeps(cfg)
+    assert plan["lds"] == [(c.case_id, {"sweep": "lds", **c.label}) for c in lds[:6]]
+    assert [cid for cid, _ in plan["lattice"]] == [c.case_id for c in cases if c.sweep == "lattice"]
+    assert [c.case_id for c in planned_cases(cfg, lds_points=3)] == [c.case_id for c in cases if c.in_sweep]
 
 
 def _metrics(point: dict, preset: str, seed: int, status: str = "ok", cpu: float = 60.0) -> dict:
