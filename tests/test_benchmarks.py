@@ -167,3 +167,43 @@ def test_schedule_order_prints_the_known_makespans(tmp_path):
     assert "costliest first: 10.0 min (lower bound 10.0)" in r.stdout
     worst = float(re.search(r"worst ([0-9.]+)", r.stdout).group(1))
     assert 10.0 < worst <= 15.0
+
+
+def test_layer_noise_pools_the_seed_spread_within_points(tmp_path):
+    """Two points x three seeds of a two-layer simple cubic bed (as above) with a seeded share of
+    the top layer's spheres removed: the script's SD over seeds is the pooled within-point SD
+    (sum of squares about each point's mean / (6 - 2)), checked here from the measures of the
+    same records, and its stated SD the root mean square of the cases' own SDs."""
+    import json
+
+    from spreadmap import config as spreadmap_config
+    from spreadmap.metrics import measure
+
+    d = 30e-6
+    xs, ys, zs = np.arange(0.5, 20, 1.0), np.arange(0.5, 4, 1.0), np.array([0.5, 1.5])
+    full = np.array([(x, y, z) for x in xs for y in ys for z in zs]) * d
+    snap = lambda p, x: {"positions": p.tolist(), "radii": [d / 2] * len(p), "blade_rear_x": x}  # noqa: E731
+    rng = np.random.default_rng(4)
+    paths = []
+    for point, share in (("a", 0.2), ("b", 0.5)):
+        for seed in (1, 2, 3):
+            keep = (full[:, 2] < d) | (rng.random(len(full)) > share)
+            end = full[keep]
+            raw = {"status": "ok",
+                   "params": {"diameter": d, "gap": 2 * d, "width": 4 * d, "blade_thickness": 2 * d},
+                   "snapshots": {"window_start": snap(end[end[:, 0] < 10 * d], 10 * d), "window_end": snap(end, 20 * d)}}
+            path = tmp_path / f"{point}-s{seed}" / "raw.json"
+            path.parent.mkdir()
+            path.write_text(json.dumps(raw))
+            paths.append(path)
+    r = run("layer_noise.py", *paths, "--csv", tmp_path / "out.csv", timeout=120)
+    assert r.returncode == 0, (r.stdout + r.stderr)[-4000:]
+    out = pd.read_csv(tmp_path / "out.csv").set_index("measure")
+    settings = spreadmap_config.load(ROOT / "config.yaml")["metrics"]
+    rows = pd.DataFrame([{"point": p.parent.name[0], **measure(json.loads(p.read_text()), settings)} for p in paths])
+    for m in ("roughness_d", "thickness_ratio", "layer_packing"):  # (the bottom layer covers the floor: coverage 1)
+        ss = sum(((g - g.mean()) ** 2).sum() for _, g in rows.groupby("point")[m])
+        assert out.loc[m, "dof"] == 4
+        assert out.loc[m, "seed_sd"] == pytest.approx(np.sqrt(ss / 4), rel=1e-9) and out.loc[m, "seed_sd"] > 0
+        assert out.loc[m, "stated_sd"] == pytest.approx(np.sqrt(np.mean(rows[f"{m}_sd"] ** 2)), rel=1e-9)
+        assert out.loc[m, "seed_sd_low"] < out.loc[m, "seed_sd"] < out.loc[m, "seed_sd_high"]

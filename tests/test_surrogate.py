@@ -138,6 +138,27 @@ def test_per_case_noise_is_the_gp_alpha_and_the_noise_of_a_new_run():
     assert np.all(m.noise_sd(Xn) >= m.case_noise_.sd(m.scale_(Xn)))
 
 
+def test_case_noise_from_few_degree_of_freedom_sds_predicts_the_variance_not_its_geometric_mean():
+    """The known truth: sigma(z) = exp(-4 + 0.3 z1); each case states an SD estimated from 2
+    degrees of freedom (sigma sqrt(chi2_2 / 2), as the layer measures' jackknife over 3 blocks
+    does). The predicted SD must be sigma (the root mean square), where the plain log fit gives
+    the geometric mean, exp(E ln s) = sigma exp((psi(1) - ln 1) / 2) = 0.75 sigma."""
+    from scipy.special import digamma
+
+    from spreadmap.surrogate.noise import CaseNoise
+
+    rng = np.random.default_rng(8)
+    Z = rng.normal(size=(4000, 4))
+    sigma = np.exp(-4 + 0.3 * Z[:, 0])
+    sd = sigma * np.sqrt(rng.chisquare(2, len(Z)) / 2)
+    fit = CaseNoise().fit(Z, sd)
+    Zn = rng.normal(size=(50, 4))
+    truth = np.exp(-4 + 0.3 * Zn[:, 0])
+    np.testing.assert_allclose(fit.sd(Zn), truth, rtol=0.06)
+    geometric = np.exp(fit.coef_[0] + Zn @ fit.coef_[1:])
+    np.testing.assert_allclose(geometric / truth, np.exp(digamma(1.0) / 2), rtol=0.06)
+
+
 def test_targets_auto_takes_the_layer_columns_present():
     cols = ["mfr", "pd", "coverage", "other"]
     assert settings.resolve_targets("auto", cols) == ["mfr", "pd", "coverage"]

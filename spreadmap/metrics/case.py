@@ -18,7 +18,9 @@ PHASES = ("settle", "relax", "move")  # the phases of the scene, in order (yade_
 # columns added by the layer / precision work (issues 13, 14), after every older column
 NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_packing", "coverage",
                "roughness_d", "thickness_ratio", "flow_trend", "flow_trend_z", "peak_overlap_free",
-               "peak_overlap_wedged", "wedged")
+               "peak_overlap_wedged", "wedged", "layer_packing_sd", "coverage_sd", "roughness_d_sd",
+               "thickness_ratio_sd")
+LAYER_BLOCK_D = 2.0  # default block length (in d) of the layer measures' jackknife noise (.layer)
 SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batches", "surface_grid_d")
 
 
@@ -64,11 +66,12 @@ def measure(raw: dict, settings: dict) -> dict:
     out["flow_trend"] = flow_trend(raw.get("behind_series", []), s1["blade_rear_x"], s2["blade_rear_x"], gap, width)
     se = 2.0 * c / math.sqrt(out["n_passed"]) if out["n_passed"] > 0 else math.nan
     out["flow_trend_z"] = out["flow_trend"] / se if se and math.isfinite(se) else math.nan
-    layer = layer_quality(s2["positions"], s2["radii"], x0, x1, width, settings["surface_grid_d"] * d)
-    out["layer_packing"] = layer["layer_packing"]
-    out["coverage"] = layer["coverage"]
-    out["roughness_d"] = layer["roughness"] / d
-    out["thickness_ratio"] = layer["thickness"] / gap
+    layer = layer_quality(s2["positions"], s2["radii"], x0, x1, width, settings["surface_grid_d"] * d,
+                          block=settings.get("layer_block_d", LAYER_BLOCK_D) * d)
+    out["layer_packing"], out["layer_packing_sd"] = layer["layer_packing"], layer["layer_packing_sd"]
+    out["coverage"], out["coverage_sd"] = layer["coverage"], layer["coverage_sd"]
+    out["roughness_d"], out["roughness_d_sd"] = layer["roughness"] / d, layer["roughness_sd"] / d
+    out["thickness_ratio"], out["thickness_ratio_sd"] = layer["thickness"] / gap, layer["thickness_sd"] / gap
     return out
 
 

@@ -4,7 +4,13 @@ Each case's MFR and PD carry counting noise (relative SD ~0.45 / sqrt(N), N the 
 so the noise SD varies over the design space. Where the table gives ``<target>_sd`` per case, ln SD
 is fitted by least squares as a linear function of the standardised inputs (the counting law is a
 power law of N, which is a smooth function of h/d and the window), and the fit gives the SD at a
-new point. Without per-case SDs the noise is one constant, estimated by the model.
+new point. A fit of ln SD gives the geometric mean of the SDs, which for SDs that are themselves
+estimates from few degrees of freedom (the layer measures' block jackknife, 2-7 blocks) is well
+below their root mean square: with 2 degrees of freedom exp(E ln s) = 0.75 sigma. The fit's
+variance is therefore rescaled by the mean of exp(2 residual) (Duan's smearing estimate), so that
+the predicted variance is the mean of the cases' variances, not their geometric mean; for SDs
+that follow the counting law closely (MFR, PD) the factor is ~1.
+Without per-case SDs the noise is one constant, estimated by the model.
 """
 from __future__ import annotations
 
@@ -22,11 +28,14 @@ class CaseNoise:
         # a ridge-small penalty keeps the fit defined when there are fewer cases than inputs
         lam = 1e-6 * np.eye(A.shape[1])
         self.coef_ = np.linalg.solve(A.T @ A + lam, A.T @ np.log(sd[ok]))
+        residual = np.log(sd[ok]) - A @ self.coef_
+        self.smearing_ = float(np.sqrt(np.mean(np.exp(2.0 * residual))))
         self.n_ = int(ok.sum())
         return self
 
     def sd(self, Z: np.ndarray) -> np.ndarray:
-        return np.exp(self.coef_[0] + Z @ self.coef_[1:])
+        # models saved before the smearing factor load without it (factor 1)
+        return getattr(self, "smearing_", 1.0) * np.exp(self.coef_[0] + Z @ self.coef_[1:])
 
 
 def fill_missing(sd: np.ndarray | None) -> np.ndarray | None:
