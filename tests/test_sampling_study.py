@@ -164,3 +164,41 @@ def test_cases_needed_and_censoring():
     assert list(need["n_needed"].fillna(-1)) == [48, -1]
     s = ns.summarise(need).iloc[0]
     assert s["not_reached"] == 1 and s["min"] == 48 and np.isnan(s["max"]) and s["budget"] == 64
+
+
+def test_case_cost_is_the_stated_law_within_the_measured_range():
+    """The scene's CPU law at hand-computed points: ln CPU = 12.099 - 1.159 f - 1.415 ln d
+    - 2.403 ln(h/d) - 0.893 ln v + 1.402 ln(h/d)^2, clipped to 25-1350 s."""
+    phys = np.array([[0.3, 30.0, 65.0, 10.0], [0.15, 10.0, 75.0, 5.0], [0.45, 50.0, 55.0, 15.0]])
+    unit = (phys - [0.15, 10, 55, 5]) / [0.3, 40, 20, 10]
+    law = lambda f, d, h, v: np.exp(12.099 - 1.159 * f - 1.415 * np.log(d) - 2.403 * np.log(h / d)  # noqa: E731
+                                    - 0.893 * np.log(v) + 1.402 * np.log(h / d) ** 2)
+    mid, fine, coarse = law(0.3, 30, 65, 10), law(0.15, 10, 75, 5), law(0.45, 50, 55, 15)
+    assert 25 < coarse < mid < 1350 < fine  # 30 s, 48 s, 2700 s by the law
+    assert np.allclose(ns.case_cost(unit), [mid, 1350.0, coarse])  # the fine corner clips to what was measured
+
+
+def test_active_per_cpu_spends_less_cpu_per_case_and_records_it():
+    """Same seed, same LDS start: the two active designs spend the same CPU on the start, and the
+    per-CPU design's later batches cost less per case than plain ivr's."""
+    tab = ns.run(methods=("active", "active_per_cpu"), noises=("counting",), seeds=[0], n_max=64, batch=16,
+                 n_candidates=256)
+    a = tab[tab["method"] == "active"].set_index("n")["cpu_cases"]
+    b = tab[tab["method"] == "active_per_cpu"].set_index("n")["cpu_cases"]
+    assert a[32] == pytest.approx(b[32])
+    assert (b[64] - b[32]) < 0.7 * (a[64] - a[32])
+
+
+def test_cpu_needed_and_paired_ratio():
+    from spreadmap.convergence.cost_study import cpu_needed, summarise
+
+    rows = []
+    for method, cpus in (("active", [3600.0, 7200.0, 10800.0]), ("active_per_cpu", [3600.0, 5400.0, 7200.0])):
+        for seed, rmse in ((0, [0.02, 0.009, 0.004]), (1, [0.02, 0.015, 0.008])):
+            rows += [{"method": method, "seed": seed, "n": n, "map_rmse": e, "cpu_cases": c}
+                     for n, e, c in zip((32, 48, 64), rmse, cpus)]
+    need = cpu_needed(pd.DataFrame(rows), 0.01)
+    assert list(need["cpu_h"]) == [2.0, 3.0, 1.5, 2.0] and list(need["cases"]) == [48, 64, 48, 64]
+    s = summarise(need).set_index("method")
+    assert s.loc["active_per_cpu", "ratio_active_median"] == pytest.approx((2.0 / 1.5 + 3.0 / 2.0) / 2)
+    assert s.loc["active_per_cpu", "paired_seeds"] == 2 and s.loc["active", "cpu_h_median"] == 2.5

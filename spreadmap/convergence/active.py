@@ -13,6 +13,13 @@ Acquisitions (``acquisition``)
   box, the machine and the powder planes), sum_r cov(r, c)^2 / (var(c) + noise).  It spends cases
   where they help the maps, not where the variance is largest for its own sake (often the
   corners of the box, which the maps read little).
+* ``ivr_per_cpu``: the same reduction per CPU-second a case there is expected to cost (a model
+  of ln CPU fitted on the run's finished cases, ``cost``): variance reduction bought per unit of
+  the scarce resource. On this scene a case costs 25-1350 s over the design space (fine powders
+  at large h/d the most: the pile's standing reserve), so where two candidates teach the maps
+  alike, the one that costs a tenth is taken; the LDS share of each batch keeps sampling
+  everywhere whatever the cost (measured against ``ivr`` at equal CPU on a known truth with the
+  scene's cost law: ``cost_study``, docs/sampling).
 * ``max_sd``: the candidate with the largest posterior variance.
 
 With several targets (MFR and PD) the scores are summed in units of each target's noise
@@ -27,14 +34,14 @@ another seed gives another candidate set and so another batch.
 """
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 from scipy.stats import qmc
 
 from ..design import NAMES, to_physical, to_unit
 
-ACQUISITIONS = ("ivr", "max_sd")
+ACQUISITIONS = ("ivr", "ivr_per_cpu", "max_sd")
 
 
 def candidates(n: int, seed: int) -> np.ndarray:
@@ -68,6 +75,7 @@ class _Posterior:
         return c
 
     def score(self, acquisition: str) -> np.ndarray:
+        """The variance reduction (``ivr``, ``ivr_per_cpu``) or variance (``max_sd``) of each candidate."""
         if acquisition == "max_sd":
             return self.var / self.noise
         return np.sum(self.covRC**2, axis=0) / (self.var + self.noise) / self.noise
@@ -85,24 +93,30 @@ class _Posterior:
 def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = None,
                  n_candidates: int = 4096, acquisition: str = "ivr",
                  reference: np.ndarray | None = None, ranges: dict | None = None,
-                 max_reference: int = 1024, pending: np.ndarray | None = None) -> np.ndarray:
+                 max_reference: int = 1024, pending: np.ndarray | None = None,
+                 cost: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     """The next ``n`` design points (physical units, NAMES order) for the fitted ``models``.
 
     ``done``: the finished (or already scheduled) cases, physical units: used by the fallback's
     exclusion radius (the GP already knows its training cases).  ``reference``: where the map is
     read (``map_criteria.map_grids`` stacked), needed by ``ivr``; a seeded subset of at most
     ``max_reference`` of them is used.  ``pending``: points already in this batch (physical
-    units, e.g. its LDS share), conditioned on before the picks (GP models only).
+    units, e.g. its LDS share), conditioned on before the picks (GP models only). ``cost``:
+    predicted CPU seconds of cases at physical points (``cost.fit_cost``), needed by
+    ``ivr_per_cpu``.
     """
     if acquisition not in ACQUISITIONS:
         raise ValueError(f"acquisition {acquisition!r}; allowed: {list(ACQUISITIONS)}")
     if n < 1:
         raise ValueError(f"a batch needs n >= 1 (n = {n})")
     C = candidates(max(int(n_candidates), n), seed)
+    per_cpu = acquisition == "ivr_per_cpu"
+    if per_cpu and cost is None:
+        raise ValueError("acquisition 'ivr_per_cpu' needs a cost model (cost=)")
     if not all(hasattr(m, "posterior_cov") for m in models):
         return _fallback(models, n, C, done, ranges)
     R = None
-    if acquisition == "ivr":
+    if acquisition in ("ivr", "ivr_per_cpu"):
         if reference is None:
             raise ValueError("acquisition 'ivr' needs reference points (the map grids)")
         R = to_unit(np.asarray(reference, float), ranges)
@@ -112,6 +126,11 @@ def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = 
     n_cand = len(C)
     if pending is not None and len(pending):
         C = np.vstack([C, to_unit(np.asarray(pending, float), ranges)])
+    # relative cost of each candidate (the median candidate's is 1): the reduction is divided by it
+    relative_cost = np.ones(len(C))
+    if per_cpu:
+        c = np.asarray(cost(to_physical(C, ranges)), float)
+        relative_cost = c / np.median(c[:n_cand])
     posts = [_Posterior(m, C, R) for m in models]
     for j in range(n_cand, len(C)):  # the pending points: update the posterior, never pick them
         for p in posts:
@@ -119,7 +138,7 @@ def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = 
     chosen: list[int] = list(range(n_cand, len(C)))
     first = len(chosen)
     for _ in range(int(n)):
-        score = sum(p.score(acquisition) for p in posts)
+        score = sum(p.score(acquisition) for p in posts) / relative_cost
         score[chosen] = -np.inf
         j = int(np.argmax(score))
         chosen.append(j)

@@ -15,7 +15,11 @@ model's mean against the known truth, over the map grids, falls to a target.
 * Designs: ``lds`` (scrambled Halton prefix, seeded), ``random`` (i.i.d. uniform, seeded),
   ``lattice`` (k^4 points, ends included; only its noise varies with the seed), ``active``
   (LDS start, then batches by ``active.choose_batch``, integrated variance reduction over the
-  map grids, candidates seeded).
+  map grids, candidates seeded), ``active_per_cpu`` (the same per predicted CPU-second: a cost
+  model fitted on the run's cases' observed CPU, ``cost.fit_cost``).
+* CPU: each case costs ``case_cost`` (the default scene's law, below) times a log-normal
+  scatter of SD 0.19; every checkpoint records the CPU spent so far (``cpu_cases``), so the
+  designs are compared at equal CPU as well as at equal cases (``cost_study``).
 * Model: the GP of ``model.make_gp_fit`` (the same for every design), refitted from scratch at
   every checkpoint.
 * Map RMSE: over the map grids of ``map_criteria.map_grids`` (box cell centres, machine plane,
@@ -39,11 +43,18 @@ import pandas as pd
 from ..design import NAMES, to_physical, to_unit
 from ..sampling import halton_unit, lattice_unit
 from . import active
+from .cost import fit_cost
 from .map_criteria import map_grids
 from .model import make_gp_fit
 from .sampling_study import flow_curve
 
 MEAN, SD = 0.29, 0.085
+# ln CPU seconds of a default-preset case on this scene: least squares on 60 finished cases
+# (docs/study/cases_lds.csv's 16, docs/precision's shipped arm's 32, docs/fidelity's default 12),
+# in 1, f, ln d, ln(h/d), ln v, ln(h/d)^2; residual SD 0.19; clipped to the measured 25-1350 s
+COST_LAW = (12.099, -1.159, -1.415, -2.403, -0.893, 1.402)
+COST_SCATTER = 0.19
+COST_RANGE_S = (25.0, 1350.0)
 
 
 def _flow_moments() -> tuple[float, float]:
@@ -57,6 +68,16 @@ _FLOW = _flow_moments()
 def mfr_like(u: np.ndarray) -> np.ndarray:
     """flow_curve standardised (moments from 2^15 Halton points) and scaled to mean 0.29, SD 0.085."""
     return MEAN + SD * (flow_curve(u) - _FLOW[0]) / _FLOW[1]
+
+
+def case_cost(u: np.ndarray, ranges: dict | None = None) -> np.ndarray:
+    """CPU seconds of cases at unit-cube points u by the scene's law (COST_LAW)."""
+    p = to_physical(np.atleast_2d(u), ranges)
+    f, d, h, v = p.T
+    r = np.log(h / d)
+    c = COST_LAW
+    ln_cpu = c[0] + c[1] * f + c[2] * np.log(d) + c[3] * r + c[4] * np.log(v) + c[5] * r * r
+    return np.clip(np.exp(ln_cpu), *COST_RANGE_S)
 
 
 def counting_sd(y: np.ndarray, u: np.ndarray, ranges: dict | None = None) -> np.ndarray:
@@ -101,6 +122,11 @@ def one_run(method: str, noise: str, seed: int, checkpoints: Sequence[int], star
     grids_u = {k: to_unit(v) for k, v in map_grids().items()}
     reference = np.vstack([to_physical(g) for g in grids_u.values()])
     rng = np.random.default_rng([int(seed), 7])
+    cost_rng = np.random.default_rng([int(seed), 11])
+
+    def spent(u_new):  # observed CPU of new cases: the law with its scatter (its own random stream)
+        return case_cost(u_new) * np.exp(COST_SCATTER * cost_rng.standard_normal(len(u_new)))
+
     fit = make_gp_fit(seed=seed)
     n_max = max(checkpoints)
     rows = []
@@ -110,6 +136,7 @@ def one_run(method: str, noise: str, seed: int, checkpoints: Sequence[int], star
         elif method == "random":
             u_all = np.random.default_rng([int(seed), 3]).random((n_max, len(NAMES)))
         y_all = sd_all = None
+        cpu_all = None if method == "lattice" else np.cumsum(spent(u_all))
         for n in checkpoints:
             u = lattice_unit(round(n ** 0.25)) if method == "lattice" else u_all[:n]
             if method == "lattice":
@@ -121,31 +148,39 @@ def one_run(method: str, noise: str, seed: int, checkpoints: Sequence[int], star
             t = time.process_time()
             m = fit(to_physical(u), y, sd)
             rmse = _rmse(m, truth, grids_u)
+            cpu_cases = float(spent(u).sum()) if method == "lattice" else float(cpu_all[n - 1])
             rows.append({"n": n, "map_rmse": rmse[0], "box_rmse": rmse[1],
-                         "cpu_s": time.process_time() - t})
+                         "cpu_s": time.process_time() - t, "cpu_cases": cpu_cases})
         return rows
-    if method != "active":
-        raise ValueError(f"method {method!r}; allowed: lds, random, lattice, active")
+    if method not in ("active", "active_per_cpu"):
+        raise ValueError(f"method {method!r}; allowed: lds, random, lattice, active, active_per_cpu")
+    if method == "active_per_cpu":
+        acquisition = "ivr_per_cpu"
     u = halton_unit(start, seed)
     y, sd = observe(u, noise, rng, truth)
+    cpu = spent(u)
     while True:
         t = time.process_time()
         m = fit(to_physical(u), y, sd)
         n = len(u)
         if n in checkpoints:
             rmse = _rmse(m, truth, grids_u)
-            rows.append({"n": n, "map_rmse": rmse[0], "box_rmse": rmse[1]})
+            rows.append({"n": n, "map_rmse": rmse[0], "box_rmse": rmse[1], "cpu_cases": float(cpu.sum())})
         if n >= n_max:
             rows[-1]["cpu_s"] = time.process_time() - t
             break
         step = min(batch, n_max - n)
+        cost = None
+        if acquisition == "ivr_per_cpu":
+            cost = fit_cost(pd.DataFrame({**dict(zip(NAMES, to_physical(u).T)), "status": "ok", "cpu_time": cpu}))
         new = active.choose_batch([m], step, seed=seed * 1000 + n, n_candidates=n_candidates,
-                                  acquisition=acquisition, reference=reference)
+                                  acquisition=acquisition, reference=reference, cost=cost)
         if rows and rows[-1]["n"] == n:
             rows[-1]["cpu_s"] = time.process_time() - t  # fit and batch choice
         u_new = to_unit(new)
         y_new, sd_new = observe(u_new, noise, rng, truth)
         u = np.vstack([u, u_new])
+        cpu = np.concatenate([cpu, spent(u_new)])
         y = np.concatenate([y, y_new])
         sd = None if sd is None else np.concatenate([sd, sd_new])
     return rows

@@ -226,7 +226,8 @@ def plot_sampling_study(table: pd.DataFrame, path_stem,
 # ----------------------------------------------------------------------------------------------
 NOISE_TITLES = {"mult3": "3 % multiplicative noise", "mult7": "7 % multiplicative noise",
                 "counting": "counting noise 0.45/sqrt(N), per-case SD known"}
-METHOD_STYLE = {"lds": ("C0", "o"), "random": ("C1", "v"), "lattice": ("C2", "s"), "active": ("C3", "D")}
+METHOD_STYLE = {"lds": ("C0", "o"), "random": ("C1", "v"), "lattice": ("C2", "s"), "active": ("C3", "D"),
+                "active_per_cpu": ("C4", "^")}
 
 
 def plot_noisy_study(table: pd.DataFrame, summary: pd.DataFrame, path_stem) -> dict[str, Path]:
@@ -264,6 +265,36 @@ def plot_noisy_study(table: pd.DataFrame, summary: pd.DataFrame, path_stem) -> d
     axes[0].set_ylabel("map RMSE against the truth (MFR units) [-]")
     axes[0].legend(fontsize="x-small")
     fig.suptitle("GP map error by sampling design: median over seeds, band = quartiles", fontsize="small")
+    return save_figure(fig, path_stem, rs)
+
+
+def plot_cost_study(table: pd.DataFrame, targets: Sequence[float], path_stem) -> dict[str, Path]:
+    """Map RMSE against cases (left) and against the CPU hours they cost (right), per design:
+    median over seeds at each checkpoint (the CPU too), band = quartiles of the RMSE; the targets
+    as dotted lines.  CSV: the medians and quartiles behind the lines."""
+    g = table.groupby(["method", "n"])
+    rs = pd.DataFrame({"median": g["map_rmse"].median(), "q25": g["map_rmse"].quantile(0.25),
+                       "q75": g["map_rmse"].quantile(0.75), "cpu_h": g["cpu_cases"].median() / 3600,
+                       "runs": g.size()}).reset_index()
+    fig = new_figure(9.0, 4.2)
+    axes = fig.subplots(1, 2, sharey=True)
+    for m in dict.fromkeys(table["method"]):
+        s = rs[rs["method"] == m].sort_values("n")
+        c, mk = METHOD_STYLE.get(m, ("C5", "x"))
+        for ax, x in zip(axes, (s["n"], s["cpu_h"])):
+            ax.fill_between(x, s["q25"], s["q75"], color=c, alpha=0.18, lw=0)
+            ax.plot(x, s["median"], color=c, marker=mk, ms=4, lw=1.4, label=f"{m} ({int(s['runs'].max())} seeds)")
+    for ax in axes:
+        for t in targets:
+            ax.axhline(t, color="0.3", ls=":", lw=1)
+        ax.set_yscale("log")
+        ax.grid(True, which="major", alpha=0.3)
+    axes[0].set_xlabel(N_LABEL)
+    axes[1].set_xlabel("CPU hours of the cases (the scene's cost law) [h]")
+    axes[0].set_ylabel("map RMSE against the truth (MFR units) [-]")
+    axes[1].legend(fontsize="x-small")
+    fig.suptitle("Map error per case and per CPU hour (counting noise): median over seeds, band = quartiles",
+                 fontsize="small")
     return save_figure(fig, path_stem, rs)
 
 

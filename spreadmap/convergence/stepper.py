@@ -11,8 +11,10 @@ on the cases in run order, same batches), and decides:
   ``converge.cpu_budget_h``;
 * otherwise the next batch: ``converge.batch`` points (fewer if the budget is closer): with
   ``sampling: active`` a share ``lds_share`` of them are the next points of the LDS sequence and
-  the rest are chosen by ``active.choose_batch`` (conditioned on that LDS share); with
-  ``sampling: lds`` all are the next LDS points.
+  the rest are chosen by ``active.choose_batch`` (conditioned on that LDS share; with
+  ``acquisition: ivr_per_cpu`` against a cost model fitted on the finished cases' CPU times,
+  ``cost.fit_cost``, or plain ``ivr`` while fewer than five cases have one: the record's
+  ``acquisition`` says which); with ``sampling: lds`` all are the next LDS points.
 
 Why an LDS share: active cases are not a uniform sample of the design space, so statistics of
 the cases (the study's five statistics, their bootstrap CIs) would describe where the model was
@@ -35,12 +37,13 @@ from ..design import NAMES
 from ..sampling import halton
 from ..table import usable
 from . import active, map_criteria
+from .cost import fit_cost
 from .model import FitFunction, make_gp_fit
 from .study_rule import batches_until_converged
 
 STEP_DEFAULTS: dict[str, Any] = {
     "start": 32, "batch": 16, "budget": 512, "cpu_budget_h": None, "sampling": "active",
-    "acquisition": "ivr", "candidates": 4096, "seed": 7, "k_consecutive": 3, "lds_share": 0.5,
+    "acquisition": "ivr_per_cpu", "candidates": 4096, "seed": 7, "k_consecutive": 3, "lds_share": 0.5,
 }
 
 
@@ -137,10 +140,17 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
         if k_lds < size:
             reference = np.vstack(list(grids.values()))
             models = [result["models"][t] for t in targets]
+            acquisition, cost = s["acquisition"], None
+            if acquisition == "ivr_per_cpu":
+                try:
+                    cost = fit_cost(table, ranges)
+                except ValueError:  # too few cases with a CPU time: no cost model, the plain reduction
+                    acquisition = "ivr"
+            record["acquisition"] = acquisition
             more = active.choose_batch(models, size - k_lds, seed=int(s["seed"]) * 1_000_003 + n,
                                        done=table[list(NAMES)].to_numpy(float),
-                                       n_candidates=int(s["candidates"]), acquisition=s["acquisition"],
-                                       reference=reference, ranges=ranges, pending=pts)
+                                       n_candidates=int(s["candidates"]), acquisition=acquisition,
+                                       reference=reference, ranges=ranges, pending=pts, cost=cost)
             pts = np.vstack([pts, more])
         record["next_n"] = n + size
         record["next_batch"] = [rounded(dict(zip(NAMES, map(float, p)))) for p in pts]
