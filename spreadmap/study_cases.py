@@ -14,6 +14,7 @@ from typing import NamedTuple
 import pandas as pd
 
 from spreadmap.cases import case_id
+from spreadmap.design import NAMES
 from spreadmap.sampling import halton, lattice
 from spreadmap.table import build_table
 
@@ -65,8 +66,33 @@ def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.D
                        [cases / cid / "benchmark.tsv" for cid, _ in done], [label for _, label in done])
 
 
-def progress(planned: dict[str, list[tuple[str, dict]]], tables: dict[str, pd.DataFrame]) -> pd.DataFrame:
-    """Per sweep: cases planned, finished, usable-status counts and their CPU hours."""
+def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame]) -> dict[str, float]:
+    """Per sweep: the predicted CPU hours of its planned cases not yet finished, from a cost model
+    (spreadmap.convergence.cost) fitted on every finished case of the sweeps; a case shared by two
+    sweeps counts in each. NaN when too few cases have finished for a cost model."""
+    finished = pd.concat([t for t in tables.values() if len(t)], ignore_index=True) if any(len(t) for t in tables.values()) else pd.DataFrame()
+    done = set(finished["case_id"]) if "case_id" in finished else set()
+    todo: dict[str, dict[str, dict]] = {name: {} for name in tables}
+    for case in planned_cases(config):
+        if case.case_id not in done and case.sweep in todo:
+            todo[case.sweep][case.case_id] = case.point
+    from spreadmap.convergence.cost import fit_cost  # here: the workflow's registry imports this module, not scikit-learn
+
+    try:
+        cost = fit_cost(finished.drop_duplicates("case_id"), config.get("ranges"))
+    except (ValueError, KeyError):
+        return {name: float("nan") for name in tables}
+    out = {}
+    for name, points in todo.items():
+        X = pd.DataFrame(list(points.values()), columns=list(NAMES)).to_numpy(float)
+        out[name] = float(cost(X).sum()) / 3600.0 if len(X) else 0.0
+    return out
+
+
+def progress(planned: dict[str, list[tuple[str, dict]]], tables: dict[str, pd.DataFrame],
+             to_go: dict[str, float] | None = None) -> pd.DataFrame:
+    """Per sweep: cases planned, finished, usable-status counts and their CPU hours (and, given
+    ``to_go`` from cpu_hours_to_go, the predicted CPU hours of the rest)."""
     rows = []
     for name, plan in planned.items():
         table = tables[name]
@@ -76,4 +102,6 @@ def progress(planned: dict[str, list[tuple[str, dict]]], tables: dict[str, pd.Da
         rows.append({"sweep": name, "planned": len({cid for cid, _ in plan}), "finished": len(unique) if "case_id" in table else 0,
                      "ok": int((status == "ok").sum()), "failed": int((status != "ok").sum()),
                      "cpu_hours": round(float(cpu), 3)})
+        if to_go is not None:
+            rows[-1]["cpu_hours_to_go"] = round(float(to_go[name]), 1)
     return pd.DataFrame(rows)

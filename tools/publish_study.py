@@ -5,7 +5,8 @@
 
 Writes the cases tables of the sweeps its config plans (cases_lds.csv, cases_lattice.csv: every
 finished case, in plan order, with the workflow's labels), progress.csv (per sweep: planned,
-finished, failed, CPU hours), the config it ran with, and copies the analyses that exist (the
+finished, failed, CPU hours, and the CPU hours still to go, predicted by a cost model of the
+finished cases), the config it ran with, and copies the analyses that exist (the
 sweeps' convergence, the converge run's table and stopping path, the surrogate, the maps, the
 held-out points' table); what does not exist yet is listed. Then summary.md (and the trends'
 tables trend_*.csv) from what is there (spreadmap.study_summary). A later session grows the same
@@ -22,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from spreadmap import config as cfgmod  # noqa: E402
-from spreadmap.study_cases import finished_table, planned_sweeps, progress  # noqa: E402
+from spreadmap.study_cases import cpu_hours_to_go, finished_table, planned_sweeps, progress  # noqa: E402
 from spreadmap.study_summary import summary_markdown  # noqa: E402
 from spreadmap.table import write_table  # noqa: E402
 
@@ -50,7 +51,7 @@ def main(argv=None) -> int:
     tables = {name: finished_table(args.workdir, cases) for name, cases in plan.items()}
     for name, table in tables.items():
         write_table(table, args.out / f"cases_{name}.csv")
-    done = progress(plan, tables)
+    done = progress(plan, tables, cpu_hours_to_go(config, tables))
     write_table(done, args.out / "progress.csv")
     print(done.to_string(index=False))
     missing = []
