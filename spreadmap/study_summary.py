@@ -83,8 +83,48 @@ def _convergence(study: Path) -> list[str]:
             if key.startswith("ratio_") and isinstance(ratio, dict):
                 lines.append(f"- {ratio.get('text', '')}")
     else:
-        lines.append(f"- The study's rule on the sweeps: {NOT_YET}.")
+        lines += _study_rule_so_far(study)
     return lines
+
+
+def _study_rule_so_far(study: Path) -> list[str]:
+    """The study's rule on the sweeps' partitions that have finished (before the workflow's own
+    convergence summary exists): the LDS partitions of config.yaml whose every case has run, the
+    lattices whose every case has run; the largest relative change of the five statistics of MFR
+    and PD from the partition before."""
+    import yaml
+
+    from spreadmap.convergence.study_rule import convergence_table, first_converged
+
+    cfg_path = study / "config.yaml"
+    cfg = yaml.safe_load(cfg_path.read_text()) if cfg_path.exists() else {}
+    conv = cfg.get("convergence") or {}
+    tol, floors = conv.get("tolerance", 0.005), conv.get("floors")
+    lines = []
+    lds = _read_csv(study / "cases_lds.csv")
+    partitions = ((cfg.get("sweeps") or {}).get("lds") or {}).get("partitions", [])
+    if lds is not None and len(lds) and "index" in lds:
+        indices = set(lds["index"].astype(int))
+        complete = [n for n in sorted(partitions) if all(i in indices for i in range(n))]
+        if len(complete) >= 2:
+            table = convergence_table(lds[lds["index"] < max(complete)], ("mfr", "pd"), complete, tolerance=tol, floors=floors)
+            steps = ", ".join(f"{int(r['partition'])}: {100 * r['max_change']:.1f} %" for r in table.to_dict("records")[1:])
+            hit = first_converged(table)
+            lines.append(f"- The study's rule (five statistics of MFR and PD within {100 * tol:g} % of the partition "
+                         f"before), LDS so far: largest change at N = {steps}; "
+                         + (f"**holds at N = {hit}**." if hit else f"**not within {max(complete)} cases**."))
+    lattice = _read_csv(study / "cases_lattice.csv")
+    ks = sorted(set(((cfg.get("sweeps") or {}).get("lattice") or {}).get("k", [])))
+    if lattice is not None and len(lattice) and "k" in lattice:
+        done = [k for k in ks if (lattice["k"] == k).sum() == k ** len(NAMES)]
+        if len(done) >= 2:
+            table = convergence_table(lattice[lattice["k"].isin(done)], ("mfr", "pd"), tolerance=tol, floors=floors,
+                                      partition_col="k")
+            steps = ", ".join(f"{int(r['partition'])}: {100 * r['max_change']:.1f} %" for r in table.to_dict("records")[1:])
+            hit = first_converged(table)
+            lines.append(f"- The study's rule, lattices so far: largest change at N = {steps}; "
+                         + (f"**holds at N = {hit}**." if hit else f"**not within {max(k ** len(NAMES) for k in done)} cases**."))
+    return lines or [f"- The study's rule on the sweeps: {NOT_YET} (fewer than two complete partitions)."]
 
 
 def _surrogate(study: Path) -> list[str]:

@@ -60,3 +60,31 @@ def test_the_summary_answers_from_the_files_and_says_what_has_not_run(tmp_path):
     assert "do not separate the ranks 2-3" in mfr
     assert "- jamming: 2 of 3 cases; h/d 1.10-1.22, v 5.0-6.0 mm/s" in text
     assert text.count(NOT_YET) == 3  # the rule, the surrogate's metrics, the trends
+
+
+def test_the_studys_rule_so_far_uses_only_complete_partitions(tmp_path):
+    """LDS partitions [4, 8, 12] with cases 0-9 finished: only 4 and 8 are complete, and the
+    line states the largest change of the five statistics of MFR and PD from 4 to 8, computed here
+    with numpy and scipy (std ddof 1, biased skewness and excess kurtosis, floors 1 for those)."""
+    from scipy import stats
+    import yaml
+
+    rng = np.random.default_rng(1)
+    cases = pd.DataFrame({"case_id": [f"c{i}" for i in range(10)], "index": range(10), "mfr": rng.normal(0.4, 0.05, 10), "pd": rng.normal(0.3, 0.04, 10),
+                          "status": "ok", "flagged": False, "regime": "normal", "f": 0.3, "d_um": 30.0,
+                          "h_um": 65.0, "v_mm_s": 10.0})
+    cases.to_csv(tmp_path / "cases_lds.csv", index=False)
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(
+        {"sweeps": {"lds": {"partitions": [4, 8, 12]}}, "convergence": {"tolerance": 0.005}}))
+
+    def five(x):
+        return {"mean": (np.mean(x), 0.0), "std": (np.std(x, ddof=1), 0.0), "median": (np.median(x), 0.0),
+                "skewness": (stats.skew(x), 1.0), "kurtosis": (stats.kurtosis(x), 1.0)}
+
+    change = 0.0
+    for t in ("mfr", "pd"):
+        a, b = five(cases[t][:4].to_numpy()), five(cases[t][:8].to_numpy())
+        change = max(change, *(abs(b[s][0] - a[s][0]) / max(abs(a[s][0]), a[s][1]) for s in a))
+    text = summary_markdown(tmp_path)
+    assert f"largest change at N = 8: {100 * change:.1f} %" in text
+    assert "N = 12" not in text and "not within 8 cases" in text
