@@ -1,7 +1,8 @@
 """docs/study/summary.md: the study's questions answered from its published files, each number
 with its interval, and "not yet" where a part has not run.
 
-Reads (all optional): progress.csv, converge/stopped.json, convergence/summary.json,
+Reads (all optional): progress.csv, converge/stopped.json (or, while the loop runs, its last
+converge/steps/step_*.json), convergence/summary.json,
 surrogate/surrogate_metrics.csv, surrogate/surrogate_r2_vs_neurons.csv,
 maps/sensitivity_ranking_table.csv, surrogate/model.joblib (the trends) and the cases tables
 (the regimes).
@@ -72,7 +73,13 @@ def _convergence(study: Path) -> list[str]:
                    else f"the map criteria **did not hold within {s['n']} cases** (stopped: {s['reason']})")
         lines.append(f"- The main job's loop: {verdict}; {s['usable']} usable, {s['cpu_hours']:.2f} CPU hours.")
     else:
-        lines.append(f"- The main job's loop: {NOT_YET}.")
+        steps = sorted((study / "converge" / "steps").glob("step_*.json"), key=lambda s: int(s.stem.split("_")[1]))
+        if steps:
+            last = json.loads(steps[-1].read_text())
+            lines.append(f"- The main job's loop, still running: {len(steps)} steps so far; the last one says")
+            lines += ["", "```", last["summary"], "```", ""]
+        else:
+            lines.append(f"- The main job's loop: {NOT_YET}.")
     rule = study / "convergence" / "summary.json"
     if rule.exists():
         r = json.loads(rule.read_text())

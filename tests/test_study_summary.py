@@ -88,3 +88,15 @@ def test_the_studys_rule_so_far_uses_only_complete_partitions(tmp_path):
     text = summary_markdown(tmp_path)
     assert f"largest change at N = 8: {100 * change:.1f} %" in text
     assert "N = 12" not in text and "not within 8 cases" in text
+
+
+def test_a_loop_still_running_is_reported_from_its_last_step(tmp_path):
+    """No stopped.json yet: the summary quotes the last step's own account (steps sorted by their
+    number of cases, 112 after 48)."""
+    steps = tmp_path / "converge" / "steps"
+    steps.mkdir(parents=True)
+    for n in (32, 48, 112):
+        (steps / f"step_{n}.json").write_text(json.dumps({"n": n, "summary": f"after {n} cases: criteria not met yet"}))
+    text = summary_markdown(tmp_path)
+    assert "still running: 3 steps so far" in text and "after 112 cases: criteria not met yet" in text
+    assert "after 48 cases" not in text

@@ -7,7 +7,7 @@ Writes the cases tables of the sweeps its config plans (cases_lds.csv, cases_lat
 finished case, in plan order, with the workflow's labels), progress.csv (per sweep: planned,
 finished, failed, CPU hours, and the CPU hours still to go, predicted by a cost model of the
 finished cases), the config it ran with, and copies the analyses that exist (the
-sweeps' convergence, the converge run's table and stopping path, the surrogate, the maps, the
+sweeps' convergence, the converge run's steps so far, its table and stopping path, the surrogate, the maps, the
 held-out points' table); what does not exist yet is listed. Then summary.md (and the trends'
 tables trend_*.csv) from what is there (spreadmap.study_summary). A later session grows the same
 workflow directory (Snakemake re-uses every finished case) and publishes again.
@@ -65,6 +65,11 @@ def main(argv=None) -> int:
             shutil.copytree(src, dst, dirs_exist_ok=True)
         else:
             shutil.copyfile(src, dst)
+    steps = sorted((args.workdir / "results" / "converge").glob("step_*.json"))
+    if steps:  # the loop's path so far, batch by batch (a loop still running has no stopped.json)
+        (args.out / "converge" / "steps").mkdir(parents=True, exist_ok=True)
+        for step in steps:
+            shutil.copyfile(step, args.out / "converge" / "steps" / step.name)
     if missing:
         print("not yet run:", ", ".join(missing))
     text = summary_markdown(args.out, config.get("ranges"))
