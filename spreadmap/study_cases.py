@@ -57,6 +57,22 @@ def planned_sweeps(config: dict) -> dict[str, list[tuple[str, dict]]]:
     return plan
 
 
+def loop_cases(config: dict, steps: list[dict]) -> list[tuple[str, dict]]:
+    """The main job's loop so far as (case id, label), in run order, from its step records (the
+    converge checkpoints, ordered by n): the LDS start, then each step's next batch; labels as the
+    workflow's converge table (`sweep` converge, `index`, `batch`, `lds`)."""
+    grow = config.get("converge") or {}
+    start, batch = int(grow.get("start", 32)), int(grow.get("batch", 16))
+    preset = ((config.get("sweeps") or {}).get("lds") or {}).get("preset") or config["preset"]
+    seed = config["scene"]["seed"]
+    ids = [c.case_id for c in planned_cases(config, lds_points=start) if c.sweep == "lds"][:start]
+    for step in sorted(steps, key=lambda s: int(s["n"])):
+        ids += [case_id(point, preset, seed) for point in step.get("next_batch", [])]
+    is_lds = max(steps, key=lambda s: int(s["n"]))["is_lds"] if steps else [True] * len(ids)
+    return [(cid, {"sweep": "converge", "index": i, "batch": 0 if i < start else 1 + (i - start) // batch,
+                   "lds": bool(is_lds[i])}) for i, cid in enumerate(ids)]
+
+
 def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.DataFrame:
     """The results table of the planned cases whose metrics exist in workdir/results/cases, in plan
     order (a case shared by two lattices appears under each of its labels, as in the workflow)."""

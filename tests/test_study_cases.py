@@ -142,3 +142,43 @@ def test_published_progress_recomputes(published):
     if "cpu_hours_to_go" in stored:
         to_go = cpu_hours_to_go(cfg, tables)
         np.testing.assert_allclose(stored["cpu_hours_to_go"], [round(to_go[s], 1) for s in stored["sweep"]], atol=0.051)
+
+
+def test_the_loops_cases_so_far_follow_its_steps(config):
+    """Start 4 LDS cases, batches of 2 (one LDS, one active): the loop's cases are the first four
+    of the sequence, then each step's batch in order, labelled by batch and LDS share as the
+    workflow's converge table labels them."""
+    from spreadmap.study_cases import loop_cases
+
+    cfg = copy.deepcopy(config)
+    cfg["sweeps"] = {"lds": {"seed": 42, "partitions": [4]}}
+    cfg["converge"] = {"start": 4, "batch": 2}
+    lds = [c for c in planned_cases(cfg, lds_points=6) if c.sweep == "lds"]
+    extra = {"f": 0.2, "d_um": 20.0, "h_um": 60.0, "v_mm_s": 7.0}
+    steps = [{"n": 6, "next_batch": [], "is_lds": [True] * 4 + [True, False] + [True, False]},
+             {"n": 4, "next_batch": [lds[4].point, extra]}]
+    steps[0]["next_batch"] = [lds[5].point, extra]
+    got = loop_cases(cfg, steps)
+    seed, preset = cfg["scene"]["seed"], cfg["preset"]
+    assert [cid for cid, _ in got] == [c.case_id for c in lds[:5]] + [case_id(extra, preset, seed), lds[5].case_id,
+                                                                     case_id(extra, preset, seed)]
+    assert [lab["batch"] for _, lab in got] == [0, 0, 0, 0, 1, 1, 2, 2]
+    assert [lab["lds"] for _, lab in got] == [True] * 5 + [False, True, False]
+
+
+def test_published_loop_cases_are_its_steps_cases(published):
+    """cases_converge.csv (the loop so far) holds the cases its published steps planned, in run order,
+    with their batch and LDS-share labels, and its CPU equals the last step's."""
+    from spreadmap.study_cases import loop_cases
+
+    cfg, _ = published
+    steps = [json.loads(s.read_text()) for s in (DOCS / "converge" / "steps").glob("step_*.json")]
+    table = pd.read_csv(DOCS / "cases_converge.csv")
+    planned = {cid: label for cid, label in loop_cases(cfg, steps)}
+    assert list(table["index"]) == sorted(table["index"])
+    for row in table.to_dict("records"):
+        label = planned[row["case_id"]]
+        assert (row["index"], row["batch"], bool(row["lds"])) == (label["index"], label["batch"], label["lds"])
+    last = max(steps, key=lambda s: s["n"])
+    assert len(table) == last["n"]
+    assert table["cpu_time"].sum() / 3600 == pytest.approx(last["cpu_hours"], rel=1e-6)

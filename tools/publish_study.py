@@ -7,7 +7,8 @@ Writes the cases tables of the sweeps its config plans (cases_lds.csv, cases_lat
 finished case, in plan order, with the workflow's labels), progress.csv (per sweep: planned,
 finished, failed, CPU hours, and the CPU hours still to go, predicted by a cost model of the
 finished cases), the config it ran with, and copies the analyses that exist (the
-sweeps' convergence, the converge run's steps so far, its table and stopping path, the surrogate, the maps, the
+sweeps' convergence, the converge run's steps so far (and, while it runs, the table of its cases
+so far), its table and stopping path, the surrogate, the maps, the
 held-out points' table); what does not exist yet is listed. Then summary.md (and the trends'
 tables trend_*.csv) from what is there (spreadmap.study_summary). A later session grows the same
 workflow directory (Snakemake re-uses every finished case) and publishes again.
@@ -15,6 +16,7 @@ workflow directory (Snakemake re-uses every finished case) and publishes again.
 from __future__ import annotations
 
 import argparse
+import json
 import shutil
 import sys
 from pathlib import Path
@@ -23,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from spreadmap import config as cfgmod  # noqa: E402
-from spreadmap.study_cases import cpu_hours_to_go, finished_table, planned_sweeps, progress  # noqa: E402
+from spreadmap.study_cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress  # noqa: E402
 from spreadmap.study_summary import summary_markdown  # noqa: E402
 from spreadmap.table import write_table  # noqa: E402
 
@@ -70,6 +72,9 @@ def main(argv=None) -> int:
         (args.out / "converge" / "steps").mkdir(parents=True, exist_ok=True)
         for step in steps:
             shutil.copyfile(step, args.out / "converge" / "steps" / step.name)
+        if not (args.workdir / "results" / "converge" / "table.csv").exists():  # its cases so far
+            records = [json.loads(s.read_text()) for s in steps]
+            write_table(finished_table(args.workdir, loop_cases(config, records)), args.out / "cases_converge.csv")
     if missing:
         print("not yet run:", ", ".join(missing))
     text = summary_markdown(args.out, config.get("ranges"))
