@@ -11,7 +11,7 @@ from spreadmap.fidelity_plan import knob_cases, knob_presets, preset_cases
 from spreadmap.sampling import chosen_points
 from spreadmap.render import template_sha256
 from spreadmap.scene import UnsafeTimeStep, scene_parameters
-from spreadmap.study_cases import planned_cases
+from spreadmap.study_cases import loop_labels, planned_cases
 
 try:
     spreadmap_config.validate(config)
@@ -134,15 +134,15 @@ def converge_final_step(wildcards):
 
 
 def converge_final_cases():
-    """Case ids of the whole converge run, in run order, with the batch each came in and
-    whether it is an LDS case (the start and each batch's LDS share) or an active one."""
+    """(case id, label in the converge table) of the whole converge run, in run order; the label
+    (spreadmap.study_cases.loop_labels) holds the batch each came in and whether it is an LDS case
+    (the start and each batch's LDS share) or an active one."""
     final = converge_final_step(None)
     n = int(final.rsplit("_", 1)[1].split(".")[0])
     ids, _ = converge_chain(n)
     with open(final) as fh:
         is_lds = json.load(fh)["is_lds"]
-    start, batch = GROW.get("start", 32), GROW.get("batch", 16)
-    return [(cid, 0 if i < start else 1 + (i - start) // batch, bool(is_lds[i])) for i, cid in enumerate(ids)]
+    return list(zip(ids, loop_labels(is_lds[:len(ids)], GROW.get("start", 32), GROW.get("batch", 16))))
 
 
 def case_files(set_name, filename):

@@ -52,13 +52,12 @@ rule converge_table:
     surrogate and the maps trained on the converged sample read."""
     input:
         step=converge_final_step,
-        metrics=lambda wc: [f"results/cases/{cid}/metrics.json" for cid, _, _ in converge_final_cases()],
-        benchmarks=lambda wc: [f"results/cases/{cid}/benchmark.tsv" for cid, _, _ in converge_final_cases()],
+        metrics=lambda wc: [f"results/cases/{cid}/metrics.json" for cid, _ in converge_final_cases()],
+        benchmarks=lambda wc: [f"results/cases/{cid}/benchmark.tsv" for cid, _ in converge_final_cases()],
     output:
         table="results/converge/table.csv",
     params:
-        labels=lambda wc: [{"sweep": "converge", "index": i, "batch": b, "lds": lds}
-                           for i, (_, b, lds) in enumerate(converge_final_cases())],
+        labels=lambda wc: [label for _, label in converge_final_cases()],
     log:
         "logs/converge/table.log",
     localrule: True

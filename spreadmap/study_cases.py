@@ -69,8 +69,15 @@ def loop_cases(config: dict, steps: list[dict]) -> list[tuple[str, dict]]:
     for step in sorted(steps, key=lambda s: int(s["n"])):
         ids += [case_id(point, preset, seed) for point in step.get("next_batch", [])]
     is_lds = max(steps, key=lambda s: int(s["n"]))["is_lds"] if steps else [True] * len(ids)
-    return [(cid, {"sweep": "converge", "index": i, "batch": 0 if i < start else 1 + (i - start) // batch,
-                   "lds": bool(is_lds[i])}) for i, cid in enumerate(ids)]
+    return list(zip(ids, loop_labels(is_lds[:len(ids)], start, batch)))
+
+
+def loop_labels(is_lds: list[bool], start: int, batch: int) -> list[dict]:
+    """The labels of the loop's cases in run order in its table (the workflow's converge table and
+    the study's): `sweep` converge, `index`, `batch` (0 for the LDS start, then 1, 2, ...) and `lds`
+    (the LDS start and each batch's LDS share, or an active case)."""
+    return [{"sweep": "converge", "index": i, "batch": 0 if i < start else 1 + (i - start) // batch, "lds": bool(lds)}
+            for i, lds in enumerate(is_lds)]
 
 
 def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.DataFrame:
@@ -86,7 +93,8 @@ def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame]) -> dict[str, 
     """Per sweep: the predicted CPU hours of its planned cases not yet finished, from a cost model
     (spreadmap.convergence.cost) fitted on every finished case of the sweeps; a case shared by two
     sweeps counts in each. NaN when too few cases have finished for a cost model."""
-    finished = pd.concat([t for t in tables.values() if len(t)], ignore_index=True) if any(len(t) for t in tables.values()) else pd.DataFrame()
+    nonempty = [t for t in tables.values() if len(t)]
+    finished = pd.concat(nonempty, ignore_index=True) if nonempty else pd.DataFrame()
     done = set(finished["case_id"]) if "case_id" in finished else set()
     todo: dict[str, dict[str, dict]] = {name: {} for name in tables}
     for case in planned_cases(config):
