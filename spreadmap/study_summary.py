@@ -4,8 +4,9 @@ with its interval, and "not yet" where a part has not run.
 Reads (all optional): progress.csv, converge/stopped.json (or, while the loop runs, its last
 converge/steps/step_*.json), convergence/summary.json,
 surrogate/surrogate_metrics.csv, surrogate/surrogate_r2_vs_neurons.csv,
-maps/sensitivity_ranking_table.csv, surrogate/model.joblib (the trends) and the cases tables
-(the regimes).
+maps/sensitivity_ranking_table.csv, surrogate/model.joblib (the trends), heldout/score.json and
+heldout/score.csv (the held-out check: scripts/heldout.py score) and the cases tables (the
+regimes, the flagged cases).
 """
 from __future__ import annotations
 
@@ -154,6 +155,26 @@ def _surrogate(study: Path) -> list[str]:
     return lines
 
 
+def _heldout(study: Path) -> list[str]:
+    lines = ["## The held-out check (points no sweep ran, predicted before they ran)"]
+    path = study / "heldout" / "score.json"
+    if not path.exists():
+        return lines + [NOT_YET]
+    for r in json.loads(path.read_text()):
+        lines.append(f"- {r['target']}: {r['inside']} of {r['points']} points' seed means inside their "
+                     f"{100 * r['level']:g} % prediction intervals (coverage {r['coverage']:.2f}, 95 % CI "
+                     f"{r['coverage_low']:.2f}-{r['coverage_high']:.2f}); RMSE {r['rmse']:.4f} against "
+                     f"{r['rmse_expected']:.4f} expected from the stated SDs (mean z^2 {r['mean_z2']:.2f}, "
+                     f"p = {r['p_sd_right']:.2g} for 'the SDs are right')")
+    table = _read_csv(study / "heldout" / "score.csv")
+    if table is not None and "inside" in table:
+        outside = table[~table["inside"].astype(bool)]
+        for r in outside.to_dict("records"):
+            lines.append(f"  - outside: {r['name']} {r['target']}: {r['seed_mean']:.4f} over {int(r['n_runs'])} seeds "
+                         f"against {r['predicted']:.4f} +- {r['sd_of_mean']:.4f} (z = {r['z']:.1f})")
+    return lines
+
+
 def _ranking(study: Path) -> list[str]:
     lines = ["## Which parameters matter (Sobol' total indices: of the surrogate's mean, with the 95 % interval "
              "over its draws; ranks from the intervals)"]
@@ -206,11 +227,16 @@ def _regimes(study: Path) -> list[str]:
     for regime, group in cases.groupby("regime"):
         lines.append(f"- {regime}: {len(group)} of {len(cases)} cases; h/d {group['h_over_d'].min():.2f}-"
                      f"{group['h_over_d'].max():.2f}, v {group['v_mm_s'].min():.1f}-{group['v_mm_s'].max():.1f} mm/s")
+    if "flagged" in cases:
+        flagged = cases[cases["flagged"].fillna(False).astype(bool)]
+        where = (f": h/d {flagged['h_over_d'].min():.2f}-{flagged['h_over_d'].max():.2f}, d "
+                 f"{flagged['d_um'].min():.0f}-{flagged['d_um'].max():.0f} um" if len(flagged) else "")
+        lines.append(f"- flagged (kept out of training): {len(flagged)} of {len(cases)} cases{where}")
     return lines
 
 
 def summary_markdown(study: Path | str, ranges: dict | None = None) -> str:
     study = Path(study)
-    sections = [_cases(study), _convergence(study), _surrogate(study), _ranking(study), _trends(study, ranges),
-                _regimes(study)]
+    sections = [_cases(study), _convergence(study), _surrogate(study), _heldout(study), _ranking(study),
+                _trends(study, ranges), _regimes(study)]
     return "# The study: what the data say\n\n" + "\n\n".join("\n".join(s) for s in sections) + "\n"

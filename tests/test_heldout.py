@@ -116,7 +116,8 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
         table[t] = syn.TRUTH[t](X) + rng.normal(0, syn.noise_sd(X, t, 0.07))
     table.loc[0, "flagged"] = True  # a flagged run is not scored
     table.to_csv(tmp_path / "table.csv", index=False)
-    out = tmp_path / "score.csv"
+    out = tmp_path / "heldout" / "score.csv"  # where a study keeps it (tools/publish_study.py copies heldout/)
+    out.parent.mkdir()
     r = subprocess.run([*script, "score", "--points", str(points), "--predictions", str(predictions),
                         "--table", str(tmp_path / "table.csv"), "--out", str(out)],
                        capture_output=True, text=True, timeout=300)
@@ -127,6 +128,15 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
     assert scored["n_runs"].sum() == 2 * 47  # 48 runs less the flagged one, per target
     assert all(s["inside"] >= 9 for s in summary), summary
     assert "seed means inside their 95% intervals" in r.stdout
+    # the study's summary states the check from these files, and names every point outside
+    from spreadmap.study_summary import summary_markdown
+
+    text = summary_markdown(tmp_path)
+    for t in ("mfr", "pd"):
+        inside = int(scored.loc[scored["target"] == t, "inside"].sum())
+        assert f"- {t}: {inside} of 12 points' seed means inside their 95 % prediction intervals" in text
+    outside = [line for line in text.splitlines() if line.startswith("  - outside: ")]
+    assert len(outside) == int((~scored["inside"]).sum())
     # a missing file is one line, status 2
     r = subprocess.run([*script, "score", "--points", str(tmp_path / "none.csv"), "--predictions", str(predictions),
                         "--table", str(out)], capture_output=True, text=True, timeout=120)

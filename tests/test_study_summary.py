@@ -48,7 +48,7 @@ def test_the_summary_answers_from_the_files_and_says_what_has_not_run(tmp_path):
                   {"target": "mfr", "parameter": "v_mm_s", "ST": 0.1, "ST_low": 0.02, "ST_high": 0.2, "rank_ST": "2-3"},
                   {"target": "mfr", "parameter": "f", "ST": 0.12, "ST_low": 0.05, "ST_high": 0.2, "rank_ST": "2-3"}]
                  ).to_csv(tmp_path / "maps" / "sensitivity_ranking_table.csv", index=False)
-    pd.DataFrame([{"case_id": f"c{i}", "status": "ok", "regime": r, "h_um": 55.0, "d_um": d, "v_mm_s": v}
+    pd.DataFrame([{"case_id": f"c{i}", "status": "ok", "regime": r, "h_um": 55.0, "d_um": d, "v_mm_s": v, "flagged": i == 0}
                   for i, (r, d, v) in enumerate([("jamming", 50, 5), ("jamming", 45, 6), ("normal", 20, 10)])]
                  ).to_csv(tmp_path / "cases_lds.csv", index=False)
     text = summary_markdown(tmp_path, RANGES)
@@ -59,7 +59,8 @@ def test_the_summary_answers_from_the_files_and_says_what_has_not_run(tmp_path):
     assert mfr.index("f 0.12") < mfr.index("v_mm_s 0.10")  # ordered by the total index
     assert "do not separate the ranks 2-3" in mfr
     assert "- jamming: 2 of 3 cases; h/d 1.10-1.22, v 5.0-6.0 mm/s" in text
-    assert text.count(NOT_YET) == 3  # the rule, the surrogate's metrics, the trends
+    assert "- flagged (kept out of training): 1 of 3 cases: h/d 1.10-1.10, d 50-50 um" in text
+    assert text.count(NOT_YET) == 4  # the rule, the surrogate's metrics, the held-out check, the trends
 
 
 def test_the_studys_rule_so_far_uses_only_complete_partitions(tmp_path):
