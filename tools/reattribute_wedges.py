@@ -10,9 +10,9 @@ cases that ran under the old rule keep its reading. This tool re-runs each case 
 every finished case flagged for a free peak overlap and nothing else) from its own parameters
 with the current scene script, in a temporary directory, and requires the same simulation: the
 same status, number of steps and sphere positions at the end of the measurement window, bit for
-bit. Only then does it replace the two attribution fields of the case's raw.json (recording the
-old values under `reattributed`), and rewrite its metrics.json; both keep their modification
-times, so Snakemake's mtime trigger does not re-run the steps and tables that read them (a
+bit. Only then does it replace the two attribution fields of the case's raw.json and of the
+launcher's copy simulated.json (recording the old values under `reattributed`), and rewrite its
+metrics.json; all keep their modification times, so Snakemake's mtime trigger does not re-run the steps and tables that read them (a
 workflow run after this reads the new flags; those before keep what they decided). A case whose
 re-run differs is left as it was and reported.
 """
@@ -83,11 +83,16 @@ def reattribute(case_dir: Path, config: dict, dry_run: bool = False) -> dict:
         return {**row, "done": False, "why": f"not the same simulation: {differs}"}
     if dry_run:
         return {**row, "done": False, "why": "dry run"}
-    times = {p: (p.stat().st_atime, p.stat().st_mtime) for p in (raw_path, metrics_path) if p.exists()}
-    updated = {**old, **{k: new[k] for k in FIELDS},
-               "reattributed": {"tool": "tools/reattribute_wedges.py", "scene_sha256": params["scene_sha256"],
-                                **{f"old_{k}": old.get(k) for k in FIELDS}}}
+    simulated_path = case_dir / "simulated.json"  # the launcher's re-use copy (spreadmap.launcher.simulate)
+    times = {p: (p.stat().st_atime, p.stat().st_mtime) for p in (raw_path, metrics_path, simulated_path) if p.exists()}
+    note = {"reattributed": {"tool": "tools/reattribute_wedges.py", "scene_sha256": params["scene_sha256"],
+                             **{f"old_{k}": old.get(k) for k in FIELDS}}}
+    updated = {**old, **{k: new[k] for k in FIELDS}, **note}
     write_json_atomically(raw_path, updated)
+    if simulated_path.exists():
+        simulated = json.loads(simulated_path.read_text())
+        if not same_simulation(old, simulated):
+            write_json_atomically(simulated_path, {**simulated, **{k: new[k] for k in FIELDS}, **note})
     metrics = case_metrics(updated, config["regime"], config["stability"], config["metrics"])
     write_json_atomically(metrics_path, metrics)
     for path, (atime, mtime) in times.items():
