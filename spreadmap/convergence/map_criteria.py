@@ -10,8 +10,15 @@ these hold (each in config ``converge:``, each reported with the batch at which 
    seen, measured, not assumed.  Against noisy observations it can never fall below the noise
    SD (E[(y - m)^2] = noise^2 + map error^2), so the target is set against the noise: factor
    1.2 means a map error of at most sqrt(1.2^2 - 1) = 0.66 noise SD.  The model, its
-   hyperparameters included, is refitted inside every fold.  Noise SD: the RMS of the table's
-   per-case ``{target}_sd`` when present, else the model's fitted noise.
+   hyperparameters included, is refitted inside every fold on every case outside it.  With
+   active batches only the LDS share's predictions are scored: the active cases sit where the
+   model was unsure and, per CPU-second, where cases are cheap (the thin gaps at large d, where
+   the error is largest), so scored on every case the RMSE weighs those regions by how often
+   they were chosen, not by their share of the map (the study's loop at 224 cases: 1.28x the
+   threshold on every case and rising as the batches went to the thin gaps); the LDS share is a
+   uniform sample of the design space, so scored on it the RMSE estimates the map's average
+   error.  Noise SD: the RMS of the scored cases' per-case ``{target}_sd`` when present, else
+   the model's fitted noise.
 2. ``map_change`` -- the RMS (default; or the largest) change of the map's mean between the
    previous batch and this one, over the map grids (a grid over the design box, the machine
    map's h x v grid, the powder maps' d x f grid of config ``maps:``), below ``fraction`` x the
@@ -44,7 +51,7 @@ from scipy import stats
 from sklearn.model_selection import KFold
 
 from ..design import NAMES, bounds
-from .model import FitFunction, MapModel, table_data
+from .model import FitFunction, MapModel, table_data, usable_rows
 from .study_rule import DEFAULT_FLOORS, STATISTICS
 
 CRITERIA: tuple[str, ...] = ("cv_rmse", "map_change", "ci")
@@ -130,24 +137,33 @@ def map_grids(maps_cfg: Mapping | None = None, ranges: dict | None = None, box_k
 # ----------------------------------------------------------------------------------------------
 # (1) cross-validated RMSE against the noise
 # ----------------------------------------------------------------------------------------------
-def cv_rmse(X, y, noise_sd, fit: FitFunction, folds: int = 5, seed: int = 0) -> dict[str, float]:
-    """K-fold CV (shuffled, seeded) of ``fit``: the model is refitted inside every fold.
+def cv_rmse(X, y, noise_sd, fit: FitFunction, folds: int = 5, seed: int = 0,
+            scored=None) -> dict[str, float]:
+    """K-fold CV (shuffled, seeded) of ``fit``: the model is refitted inside every fold, on every
+    case outside it.
 
-    Returns ``rmse`` (held-out predictions against the observed cases) and
-    ``heldout_noise_sd`` (the RMS per-case noise SD of the held-out cases, NaN when not given).
+    ``scored`` (booleans, one per case; default all): the cases whose held-out predictions are
+    scored. Returns ``rmse`` (their held-out predictions against their observations),
+    ``heldout_noise_sd`` (their RMS per-case noise SD, NaN when not given), ``n_scored`` and
+    ``rmse_all_cases`` (scored on every case).
     """
     X = np.asarray(X, float)
     y = np.asarray(y, float)
     folds = int(min(folds, len(y)))
     if folds < 2:
         raise ValueError(f"cross-validation needs at least 2 cases, got {len(y)}")
+    scored = np.ones(len(y), bool) if scored is None else np.asarray(scored, bool)
+    if scored.shape != y.shape or not scored.any():
+        raise ValueError(f"scored must mark at least one of the {len(y)} cases, got {scored.sum()} of {scored.size}")
     pred = np.empty_like(y)
     for train, test in KFold(folds, shuffle=True, random_state=seed).split(X):
         sd = None if noise_sd is None else np.asarray(noise_sd, float)[train]
         pred[test] = fit(X[train], y[train], sd).predict(X[test])
-    rmse = float(np.sqrt(np.mean((pred - y) ** 2)))
-    held = float(np.sqrt(np.mean(np.asarray(noise_sd, float) ** 2))) if noise_sd is not None else float("nan")
-    return {"rmse": rmse, "heldout_noise_sd": held}
+    rmse = float(np.sqrt(np.mean((pred - y)[scored] ** 2)))
+    held = (float(np.sqrt(np.mean(np.asarray(noise_sd, float)[scored] ** 2))) if noise_sd is not None
+            else float("nan"))
+    return {"rmse": rmse, "heldout_noise_sd": held, "n_scored": int(scored.sum()),
+            "rmse_all_cases": float(np.sqrt(np.mean((pred - y) ** 2)))}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -228,10 +244,14 @@ def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("m
     Each criterion gets ``value`` (the worst target's ratio to its threshold: <= 1 holds),
     ``holds``, and per target the numbers behind it.  ``map_change`` is None without a
     previous table.  ``models`` holds the fitted models (not JSON; dropped by ``to_json``).
-    ``stats_table``: the cases whose statistics the CIs are about (default ``table``; with active
-    batches, the LDS cases only: the others are not a uniform sample of the design space).
+    ``stats_table``: the cases whose statistics the CIs are about and whose cross-validated
+    predictions the CV RMSE scores (default ``table``; with active batches, the LDS cases only:
+    the others are not a uniform sample of the design space). Its rows must be rows of ``table``
+    (the same index).
     """
     s = settings(cfg)
+    if stats_table is not None and not (table.index.is_unique and stats_table.index.isin(table.index).all()):
+        raise ValueError("stats_table must be rows of table (a subset of its unique index)")
     grids = grids if grids is not None else map_grids(box_k=int(s["map_change"]["box_k"]))
     out: dict[str, Any] = {"n_cases": int(len(table)), "models": {}}
     per: dict[str, dict] = {c: {} for c in CRITERIA}
@@ -244,11 +264,16 @@ def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("m
         out["models"][t] = model
         noise = float(np.sqrt(np.mean(sd**2))) if sd is not None else float(model.noise_sd)
         source = "per-case noise of the table" if sd is not None else "the model's fitted noise"
-        c = cv_rmse(X, y, sd, fit, folds=int(s["cv_rmse"]["folds"]), seed=seed)
-        thr = float(s["cv_rmse"]["factor"]) * noise
-        per["cv_rmse"][t] = {"rmse": c["rmse"], "noise_sd": noise, "noise_source": source,
+        scored = None if stats_table is None else usable_rows(table, t).index.isin(usable_rows(stats_table, t).index)
+        c = cv_rmse(X, y, sd, fit, folds=int(s["cv_rmse"]["folds"]), seed=seed,
+                    scored=None if scored is None or not scored.any() else scored)
+        cv_noise = c["heldout_noise_sd"] if sd is not None else noise  # the scored cases' noise
+        thr = float(s["cv_rmse"]["factor"]) * cv_noise
+        per["cv_rmse"][t] = {"rmse": c["rmse"], "noise_sd": cv_noise, "noise_source": source,
                              "threshold": thr, "ratio": c["rmse"] / thr,
-                             "map_error_estimate": float(np.sqrt(max(c["rmse"] ** 2 - noise**2, 0.0)))}
+                             "map_error_estimate": float(np.sqrt(max(c["rmse"] ** 2 - cv_noise**2, 0.0))),
+                             "scored": "all cases" if c["n_scored"] == len(y) else "the LDS share",
+                             "n_scored": c["n_scored"], "rmse_all_cases": c["rmse_all_cases"]}
         if prev_table is not None and len(table_data(prev_table, t)[1]) >= MIN_CASES:
             Xp, yp, sdp = table_data(prev_table, t)
             ch = map_change(fit(Xp, yp, sdp), model, grids)

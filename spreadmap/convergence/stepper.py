@@ -173,7 +173,10 @@ def describe(record: Mapping[str, Any]) -> str:
             continue
         state = "holds" if now["holds"] else f"{now['value']:.3f} x its threshold"
         held = f"first held at {first} cases" if first is not None else "never held yet"
-        lines.append(f"  {name} ({req}): {state}; {held}")
+        targets = ((c.get("at_this_batch") or {}).get(name) or {}).get("targets") or {}
+        scored = {t.get("scored") for t in targets.values()} - {None, "all cases"}
+        note = f" (scored on {scored.pop()})" if name == "cv_rmse" and scored else ""
+        lines.append(f"  {name} ({req}): {state}{note}; {held}")
     sr = record["study_rule"]
     lines.append(f"  study's rule (reported): {'converged at ' + str(sr['converged_at']) if sr['converged'] else 'not converged'}"
                  + ("" if sr["max_change_now"] is None or (isinstance(sr["max_change_now"], float) and math.isnan(sr["max_change_now"]))
