@@ -17,8 +17,8 @@ these hold (each in config ``converge:``, each reported with the batch at which 
    they were chosen, not by their share of the map (on a known truth with half the cases
    crowded into a sharp corner: 1.5-1.8x the map's error; in the study's loop at 240 cases the
    two scorings happened to agree within 2 %); the LDS share is a uniform sample of the design
-   space, so scored on it the RMSE estimates the map's average error.  Noise SD: the RMS of the scored cases' per-case ``{target}_sd`` when present, else
-   the model's fitted noise.
+   space, so scored on it the RMSE estimates the map's average error.  Noise SD: the RMS of the
+   scored cases' per-case ``{target}_sd`` when present, else the model's fitted noise.
 2. ``map_change`` -- the RMS (default; or the largest) change of the map's mean between the
    previous batch and this one, over the map grids (a grid over the design box, the machine
    map's h x v grid, the powder maps' d x f grid of config ``maps:``), below ``fraction`` x the
