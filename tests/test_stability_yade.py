@@ -132,8 +132,9 @@ def test_spheres_pinned_under_the_blade_are_told_from_an_unstable_step(config, t
     for preset, point, seed in points:
         (tmp_path / preset).mkdir()
         jobs.append((case_params(config, point, preset, seed=seed), tmp_path / preset))
-    for (preset, _, _), (result, raw) in zip(points, run_many(jobs)):
+    for (preset, _, _), (params, _), (result, raw) in zip(points, jobs, run_many(jobs)):
         assert result["outcome"] == "ok", (preset, result)
+        assert raw["params"] == params  # what tools/reattribute_wedges.py re-renders a case from
         assert raw["peak_overlap_ratio"] == max(raw["peak_overlap_free"], raw["peak_overlap_wedged"])
         assert raw["peak_overlap_wedged"] > 0.05 > raw["peak_overlap_free"] > 0.0, preset
         assert raw["peak_overlap_by_phase"]["move"] == raw["peak_overlap_wedged"]  # only while the blade moves

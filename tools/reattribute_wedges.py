@@ -12,17 +12,16 @@ with the current scene script, in a temporary directory, and requires the same s
 same status, number of steps and sphere positions at the end of the measurement window, bit for
 bit. Only then does it replace the two attribution fields of the case's raw.json and of the
 launcher's copy simulated.json (recording the old values under `reattributed`), and rewrite its
-metrics.json; all keep their modification times, so Snakemake's mtime trigger does not re-run the steps and tables that read them (a
-workflow run after this reads the new flags; those before keep what they decided). A case whose
-re-run differs is left as it was and reported.
+metrics.json; all keep their modification times, so Snakemake's mtime trigger does not re-run
+the steps and tables that read them (a workflow run after this reads the new flags; those before
+keep what they decided). A case whose re-run differs is left as it was and reported. The
+parameters come from the raw record, which carries those the case ran with (`params`).
 """
 from __future__ import annotations
 
 import argparse
-import ast
 import json
 import os
-import re
 import sys
 import tempfile
 from pathlib import Path
@@ -36,15 +35,6 @@ from spreadmap.metrics import case_metrics  # noqa: E402
 from spreadmap.render import render, template_sha256  # noqa: E402
 
 FIELDS = ("peak_overlap_free", "peak_overlap_wedged")
-PARAMS_LINE = re.compile(r"^PARAMS = (.*?)\n(?=\S)", re.S | re.M)
-
-
-def case_params(script: Path) -> dict:
-    """The parameters a rendered case script embeds (its PARAMS literal)."""
-    match = PARAMS_LINE.search(script.read_text())
-    if not match:
-        raise ValueError(f"{script}: no PARAMS block")
-    return ast.literal_eval(match.group(1))
 
 
 def overlap_flagged_only(metrics: dict) -> bool:
@@ -67,8 +57,7 @@ def same_simulation(old: dict, new: dict) -> str:
 def reattribute(case_dir: Path, config: dict, dry_run: bool = False) -> dict:
     raw_path, metrics_path = case_dir / "raw.json", case_dir / "metrics.json"
     old = json.loads(raw_path.read_text())
-    params = case_params(case_dir / "case.py")
-    params["scene_sha256"] = template_sha256()
+    params = {**old["params"], "scene_sha256": template_sha256()}
     with tempfile.TemporaryDirectory(prefix="reattribute-") as tmp:
         script = Path(tmp) / "case.py"
         script.write_text(render(params))
