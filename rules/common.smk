@@ -3,6 +3,7 @@
 # which would re-run every case whenever the table grows). A case is its content (design point,
 # preset, packing seed): the same content asked for by two sets is one case, run once.
 import json
+import os
 
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import CASE_ID_PATTERN, case_id, rounded
@@ -143,6 +144,16 @@ def converge_final_cases():
     with open(final) as fh:
         is_lds = json.load(fh)["is_lds"]
     return list(zip(ids, loop_labels(is_lds[:len(ids)], GROW.get("start", 32), GROW.get("batch", 16))))
+
+
+def case_raw_input(wildcards):
+    """The raw YADE record a case's metrics are computed from; none for a case restored from a
+    published cases table (tools/restore_cases.py: its metrics.json and benchmark are the published
+    row, its raw record was not kept), so that a resumed run does not re-simulate it."""
+    folder = f"results/cases/{wildcards.case}"
+    if os.path.exists(f"{folder}/restored.json") and os.path.exists(f"{folder}/metrics.json"):
+        return {}
+    return {"raw": f"{folder}/raw.json"}
 
 
 def case_files(set_name, filename):

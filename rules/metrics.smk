@@ -1,7 +1,7 @@
 rule case_metrics:
     """MFR, PD (exact volumes), layer quality, the case's noise estimate, regime and stability flags of one case."""
     input:
-        raw="results/cases/{case}/raw.json",
+        unpack(case_raw_input),
     output:
         metrics="results/cases/{case}/metrics.json",
     params:

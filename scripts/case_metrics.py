@@ -8,6 +8,9 @@ from spreadmap.logs import log_to
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
+if "raw" not in sm.input.keys():
+    raise SystemExit(f"spreadmap: case {sm.wildcards.case} was restored from a published table (restored.json) "
+                     "and its raw YADE record is not here; delete its folder under results/cases to re-run it")
 with open(sm.input.raw) as fh:
     raw = json.load(fh)
 write_json_atomically(sm.output.metrics, case_metrics(raw, sm.params.regime, sm.params.stability, sm.params.metrics))

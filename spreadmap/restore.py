@@ -1,0 +1,110 @@
+"""Finished cases restored from a published cases table (docs/study/cases_*.csv) into a workflow
+directory, so that a run on a new machine resumes where the published one stopped instead of
+re-running hours of YADE.
+
+A published row is what the workflow's results table held for the case: the case's metrics (what
+rules/metrics.smk wrote to its metrics.json), its labels in that table (sweep, index, batch, ...)
+and its benchmark (wall time, peak memory). A restored case gets back its metrics.json and
+benchmark.tsv, plus restored.json saying where they came from; its raw YADE record is not
+published and stays missing, so the workflow (rules/common.smk, `case_raw_input`) does not ask for
+it. A case directory that holds a raw record is never touched: a real result wins over a restored
+one. The loop's step records (converge/steps/step_N.json) are restored beside the cases, with
+modification times in the order the workflow made them (cases first, then each step), so that
+Snakemake sees them up to date.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from pathlib import Path
+
+import pandas as pd
+
+from .files import write_text_atomically
+
+# Columns of a results table that are the table's labels of a case, not the case's metrics.
+LABEL_COLUMNS = ("sweep", "index", "k", "index_in_lattice", "name", "batch", "lds", "knob", "value", "is_base")
+# Columns that come from Snakemake's benchmark of the YADE run (spreadmap.table.read_benchmark).
+BENCHMARK_COLUMNS = {"benchmark_s": "s", "max_rss_mb": "max_rss"}
+RESTORED = "restored.json"
+
+
+def _json_value(value):
+    """A table cell as the metrics.json value it came from: numpy scalars to Python, NaN (an empty
+    cell) to null."""
+    if hasattr(value, "item"):
+        value = value.item()
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    return value
+
+
+def case_record(row: dict) -> tuple[dict, dict]:
+    """(metrics, benchmark) of one published row: the metrics without the table's labels and
+    benchmark columns; the benchmark as Snakemake's column names."""
+    metrics = {k: _json_value(v) for k, v in row.items() if k not in LABEL_COLUMNS and k not in BENCHMARK_COLUMNS}
+    benchmark = {col: _json_value(row.get(name)) for name, col in BENCHMARK_COLUMNS.items()}
+    return metrics, benchmark
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -> dict:
+    """Write metrics.json, benchmark.tsv and restored.json of every case of the published tables
+    under workdir/results/cases/<case_id>/ (a case in two tables once, from the first). Cases with a
+    raw record are skipped; a case already restored is rewritten. Returns counts."""
+    workdir = Path(workdir)
+    counts = {"restored": 0, "kept_real": 0, "duplicates": 0}
+    seen = set()
+    for table_path in tables:
+        table = pd.read_csv(table_path)
+        if "case_id" not in table.columns:
+            raise ValueError(f"{table_path}: not a cases table (no case_id column)")
+        sha = _sha256(table_path)
+        for i, row in enumerate(table.to_dict("records")):
+            cid = row["case_id"]
+            if cid in seen:
+                counts["duplicates"] += 1
+                continue
+            seen.add(cid)
+            folder = workdir / "results" / "cases" / cid
+            if (folder / "raw.json").exists():
+                counts["kept_real"] += 1
+                continue
+            metrics, benchmark = case_record(row)
+            files = {
+                "metrics.json": json.dumps(metrics, indent=1) + "\n",
+                "benchmark.tsv": "\t".join(benchmark) + "\n"
+                                 + "\t".join("NA" if v is None else repr(v) for v in benchmark.values()) + "\n",
+                RESTORED: json.dumps({"restored_from": str(table_path), "table_sha256": sha, "row": i,
+                                      "note": "metrics and benchmark from a published cases table; the raw "
+                                              "YADE record is not kept. Delete this folder to re-run the case."},
+                                     indent=1) + "\n",
+            }
+            for name, text in files.items():
+                write_text_atomically(folder / name, text)
+                os.utime(folder / name, (mtime, mtime))
+            counts["restored"] += 1
+    return counts
+
+
+def step_number(path: Path | str) -> int:
+    return int(Path(path).stem.rsplit("_", 1)[1])
+
+
+def restore_steps(steps: list[Path | str], workdir: Path | str, mtime: float) -> list[str]:
+    """Copy the loop's step records to workdir/results/converge/, each a second newer than the one
+    before it (and than the cases, restored at `mtime`). An existing step is left alone."""
+    out = []
+    for k, path in enumerate(sorted(steps, key=step_number), start=1):
+        target = Path(workdir) / "results" / "converge" / Path(path).name
+        if target.exists():
+            continue
+        write_text_atomically(target, Path(path).read_text())
+        os.utime(target, (mtime + k, mtime + k))
+        out.append(target.name)
+    return out

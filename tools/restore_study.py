@@ -1,0 +1,49 @@
+#!/usr/bin/env python
+"""Resume a published study on a new machine: restore its finished cases and the main job's loop
+steps into a workflow directory (a clone of the repository with the study's config.yaml), so that
+Snakemake re-uses them instead of re-running them.
+
+    .venv/bin/python tools/restore_study.py WORKDIR [--published docs/study]
+
+Restores every case of the published cases tables (cases_*.csv, thin_gap_seeds.csv): its
+metrics.json and benchmark.tsv from the published row, and restored.json saying so
+(spreadmap/restore.py); a case folder with a raw YADE record is left alone. Then the loop's step
+records (converge/steps/step_N.json), newer than the cases in the order they were made. The raw
+records are not published: a restored case has no picture, VTK export or re-read of its overlap.
+Check with `snakemake -n` in WORKDIR that only unfinished cases would run.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from spreadmap.restore import restore_cases, restore_steps  # noqa: E402
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("workdir", type=Path, help="the workflow directory to restore into")
+    parser.add_argument("--published", type=Path, default=Path(__file__).resolve().parents[1] / "docs" / "study",
+                        help="the published study folder (default: docs/study)")
+    args = parser.parse_args(argv)
+    if not (args.workdir / "Snakefile").exists():
+        parser.error(f"{args.workdir}: not a workflow directory (no Snakefile)")
+    tables = sorted(args.published.glob("cases_*.csv")) + sorted(args.published.glob("thin_gap_seeds.csv"))
+    if not tables:
+        parser.error(f"{args.published}: no cases_*.csv")
+    # an hour in the past, so that anything the resumed run makes is newer
+    base = time.time() - 3600
+    counts = restore_cases(tables, args.workdir, mtime=base)
+    steps = restore_steps(sorted((args.published / "converge" / "steps").glob("step_*.json")), args.workdir, mtime=base)
+    print(f"restore_study: {counts['restored']} cases restored from {len(tables)} tables "
+          f"({counts['kept_real']} left alone: they hold a raw record; {counts['duplicates']} listed twice), "
+          f"{len(steps)} loop steps ({', '.join(steps) or 'none new'})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
