@@ -17,6 +17,7 @@ checkpoint converge_step:
         ranges=RANGES,
         maps=config.get("maps", {}),
         lds_seed=SWEEPS.get("lds", {}).get("seed", 42),
+        noise_calibration=config.get("noise_calibration", []),
     wildcard_constraints:
         n=r"\d+",
     log:

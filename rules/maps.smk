@@ -18,6 +18,7 @@ rule maps:
         maps=MAPS,
         regime=config["regime"],
         ranges=RANGES,
+        noise_calibration=config.get("noise_calibration", []),
     log:
         "logs/maps.log",
     localrule: True

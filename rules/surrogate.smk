@@ -15,6 +15,7 @@ rule surrogate:
     params:
         surrogate=config.get("surrogate", {}),
         ranges=RANGES,
+        noise_calibration=config.get("noise_calibration", []),
     log:
         "logs/surrogate.log",
     localrule: True

@@ -8,6 +8,7 @@ from spreadmap.convergence.model import make_gp_fit
 from spreadmap.convergence.stepper import step
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
+from spreadmap.metrics.noise import calibrated_noise
 
 log_to(snakemake)  # noqa: F821
 
@@ -18,7 +19,8 @@ rows = []
 for path in sm.input.metrics:
     with open(path) as fh:
         rows.append(json.load(fh))
-table = pd.DataFrame(rows)  # run order: the previous step's cases first
+# run order: the previous step's cases first; noise SDs calibrated by region (config noise_calibration)
+table = calibrated_noise(pd.DataFrame(rows), p.noise_calibration)
 previous = None
 if "previous" in sm.input.keys():
     with open(sm.input.previous) as fh:
@@ -26,5 +28,6 @@ if "previous" in sm.input.keys():
 # the map model: a GP behind spreadmap.convergence.model's interface (the surrogate's fit can replace it)
 record = step(table, n, p.converge, previous, fit=make_gp_fit(p.ranges, n_restarts=1), ranges=p.ranges, maps_cfg=p.maps,
               lds_seed=p.lds_seed, tolerance=p.tolerance, floors=p.floors)
+record["noise_calibration"] = list(p.noise_calibration)
 write_text_atomically(sm.output.step, json.dumps(record, indent=1, default=str))
 print(record["summary"])

@@ -24,6 +24,8 @@ def raw_config():
     (lambda c: c["points"]["named"]["normal"].update(preset="nope"), r"'points\.named\.normal\.preset': value 'nope'"),
     (lambda c: c["presets"]["smoke"].pop("dt_factor"), r"'presets\.smoke': 'dt_factor' is a required property"),
     (lambda c: c["presets"]["smoke"].update(dt_factor=1.5), r"'presets\.smoke\.dt_factor': value 1\.5 .* must be <= 1"),
+    (lambda c: c.update(noise_calibration=[{"h_over_d_below": 2, "factor": -1}]),
+     r"'noise_calibration\[0\]\.factor': value -1 .* must be > 0"),
 ])
 def test_bad_values_are_refused_with_the_key_named(raw_config, change, message):
     change(raw_config)

@@ -107,3 +107,36 @@ def pooled_constant(cells: pd.DataFrame, name: str, level: float = 0.9) -> tuple
     pooled = math.sqrt(np.sum(dof * c2) / total)
     lo_q, hi_q = stats.chi2.ppf([(1 + level) / 2, (1 - level) / 2], total)
     return pooled, pooled * math.sqrt(total / lo_q), pooled * math.sqrt(total / hi_q)
+
+
+# The stated noise SDs of a results table (counting law for MFR and PD, block jackknife for the layer)
+NOISE_SD_COLUMNS = ("mfr_sd", "pd_sd", "layer_packing_sd", "coverage_sd", "roughness_d_sd", "thickness_ratio_sd")
+
+
+def calibration_factors(table: pd.DataFrame, calibration: list[dict] | None) -> np.ndarray:
+    """Per row, the factor its stated noise SDs are scaled by: the `factor` of the first region of
+    `calibration` the case lies in (a region is h/d below `h_over_d_below`), 1 outside every one."""
+    factors = np.ones(len(table))
+    if not calibration or table.empty:
+        return factors
+    h_over_d = (pd.to_numeric(table["h_um"], errors="coerce") / pd.to_numeric(table["d_um"], errors="coerce")).to_numpy(float)
+    placed = np.zeros(len(table), dtype=bool)
+    for region in calibration:
+        inside = ~placed & (h_over_d < float(region["h_over_d_below"]))
+        factors[inside] = float(region["factor"])
+        placed |= inside
+    return factors
+
+
+def calibrated_noise(table: pd.DataFrame, calibration: list[dict] | None) -> pd.DataFrame:
+    """A copy of a results table whose stated noise SDs (NOISE_SD_COLUMNS) are scaled by region
+    where packing-seed repeats measured them off (config `noise_calibration`: at thin gaps the
+    flow comes in bursts the counting law does not see). The measured values are left as they
+    are; every analysis that weighs cases by their noise (the loop's criteria and model, the
+    surrogate, the maps) reads the calibrated SDs."""
+    out = table.copy()
+    factors = calibration_factors(out, calibration)
+    for col in NOISE_SD_COLUMNS:
+        if col in out.columns:
+            out[col] = pd.to_numeric(out[col], errors="coerce") * factors
+    return out
