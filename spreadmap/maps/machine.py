@@ -84,7 +84,8 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
                Line2D([], [], color="0.15", lw=1.3, ls="--", label="constant layer thickness h (dashed)"),
                Line2D([], [], marker="o", ls="", color="0.5", alpha=0.4, ms=9, label="± one model SD (ellipse)"),
                Line2D([], [], marker="o", ls="", mfc="white", mec="black", ms=5, label="setting beyond the data")]
-    ax.legend(handles=handles, loc="lower right", fontsize=7.5, framealpha=0.9)
+    # "best" avoids the lines, the bands and the placed labels (matplotlib counts Text artists too)
+    ax.legend(handles=handles, loc="best", fontsize=7.5, framealpha=0.9)
     ax.set_xlabel(LABELS["mfr"])
     ax.set_ylabel(LABELS.get(y, y))
     if y_note:  # how far y is from MFR in disguise, across the sample
