@@ -148,7 +148,7 @@ def converge_final_cases():
 
 def case_raw_input(wildcards):
     """The raw YADE record a case's metrics are computed from; none for a case restored from a
-    published cases table (tools/restore_cases.py: its metrics.json and benchmark are the published
+    published cases table (tools/restore_study.py: its metrics.json and benchmark are the published
     row, its raw record was not kept), so that a resumed run does not re-simulate it."""
     folder = f"results/cases/{wildcards.case}"
     if os.path.exists(f"{folder}/restored.json") and os.path.exists(f"{folder}/metrics.json"):

@@ -56,9 +56,11 @@ def _sha256(path: Path) -> str:
 def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -> dict:
     """Write metrics.json, benchmark.tsv and restored.json of every case of the published tables
     under workdir/results/cases/<case_id>/ (a case in two tables once, from the first). Cases with a
-    raw record are skipped; a case already restored is rewritten. Returns counts."""
+    raw record are skipped, and so are cases that did not finish (status other than ok: failed,
+    refused, ...), which the workflow then runs again; a case already restored is rewritten.
+    Returns counts."""
     workdir = Path(workdir)
-    counts = {"restored": 0, "kept_real": 0, "duplicates": 0}
+    counts = {"restored": 0, "kept_real": 0, "duplicates": 0, "not_finished": 0}
     seen = set()
     for table_path in tables:
         table = pd.read_csv(table_path)
@@ -74,6 +76,9 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
             folder = workdir / "results" / "cases" / cid
             if (folder / "raw.json").exists():
                 counts["kept_real"] += 1
+                continue
+            if row.get("status") != "ok":  # a case that did not finish gets a new try on this machine
+                counts["not_finished"] += 1
                 continue
             metrics, benchmark = case_record(row)
             files = {

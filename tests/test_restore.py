@@ -31,7 +31,7 @@ def test_the_restored_cases_give_back_the_published_table(tmp_path):
     column for column, once both are read as CSV."""
     published = pd.read_csv(STUDY / "cases_converge.csv")
     counts = restore_cases([STUDY / "cases_converge.csv"], tmp_path, mtime=1.0e9)
-    assert counts == {"restored": len(published), "kept_real": 0, "duplicates": 0}
+    assert counts == {"restored": len(published), "kept_real": 0, "duplicates": 0, "not_finished": 0}
     rebuilt_csv = tmp_path / "rebuilt.csv"
     _restored_table(tmp_path, published).to_csv(rebuilt_csv, index=False)
     rebuilt = pd.read_csv(rebuilt_csv)
@@ -84,3 +84,18 @@ def test_snakemake_plans_no_run_for_a_restored_case(tmp_path):
     assert after.returncode == 0, after.stderr[-3000:]
     jobs = planned_jobs(after.stdout)
     assert "run_case" not in jobs and "render_case" not in jobs and jobs["results_table"] == 1, after.stdout[-2000:]
+
+
+def test_a_case_that_did_not_finish_is_not_restored(tmp_path):
+    """A failed case of a published table gets a new try on the new machine (no metrics.json is
+    written for it, so the workflow runs it); the finished ones beside it are restored."""
+    published = pd.read_csv(STUDY / "cases_lds.csv").head(3)
+    published.loc[1, "status"] = "failed"
+    published["reason"] = published["reason"].astype(object)
+    published.loc[1, "reason"] = "yade exited with code 137 (killed)"
+    table = tmp_path / "cases_x.csv"
+    published.to_csv(table, index=False)
+    counts = restore_cases([table], tmp_path, mtime=1.0e9)
+    assert counts["restored"] == 2 and counts["not_finished"] == 1
+    assert not (tmp_path / "results" / "cases" / published["case_id"][1]).exists()
+    assert (tmp_path / "results" / "cases" / published["case_id"][2] / "metrics.json").exists()

@@ -40,7 +40,8 @@ def main(argv=None) -> int:
     counts = restore_cases(tables, args.workdir, mtime=base)
     steps = restore_steps(sorted((args.published / "converge" / "steps").glob("step_*.json")), args.workdir, mtime=base)
     print(f"restore_study: {counts['restored']} cases restored from {len(tables)} tables "
-          f"({counts['kept_real']} left alone: they hold a raw record; {counts['duplicates']} listed twice), "
+          f"({counts['kept_real']} left alone: they hold a raw record; {counts['not_finished']} not finished: "
+          f"they will run; {counts['duplicates']} listed twice), "
           f"{len(steps)} loop steps ({', '.join(steps) or 'none new'})")
     return 0
 
