@@ -174,3 +174,23 @@ def test_parallel_coordinates_marks_best(cases, tmp_path):
     assert res.info["best"]["case_id"] == "lds-00011"
     assert len(csv) == len(c) - 2 and csv["best"].sum() == 1
     assert maps.best_case(maps.usable_cases(c))["case_id"] == "lds-00003"
+
+
+def test_the_noise_cross_goes_to_the_corner_the_map_leaves_empty():
+    """A band from the upper left to the lower right (the study's machine map) leaves the lower
+    left free; its mirror leaves the upper left free."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from spreadmap.maps.machine import emptiest_corner
+
+    fig, ax = plt.subplots()
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    t = np.linspace(0.05, 0.95, 40)
+    assert emptiest_corner(ax, t, 1 - t) == (0.08, 0.1)
+    assert emptiest_corner(ax, t, t) == (0.08, 0.9)
+    assert emptiest_corner(ax, np.full(40, 0.1), t) == (0.5, 0.9)  # a column at the left edge: the right side
+    plt.close(fig)

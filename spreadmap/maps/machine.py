@@ -32,6 +32,20 @@ def machine_map(model, stem, y: str = "pd", f: float = 0.45, d_um: float = 45.0,
     return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note)
 
 
+# where the noise cross may go (axes fractions of its left end; its note runs ~0.35 to the right)
+CORNERS = ((0.08, 0.9), (0.08, 0.1), (0.5, 0.9), (0.5, 0.1))
+
+
+def emptiest_corner(ax, xs, ys) -> tuple[float, float]:
+    """The corner of CORNERS whose box (the cross and its note: 0.45 wide, 0.2 high, in axes
+    fractions) holds the fewest of the map's points; the first of the emptiest on a tie."""
+    pts = ax.transAxes.inverted().transform(ax.transData.transform(np.column_stack([xs, ys])))
+    def count(corner):
+        fx, fy = corner
+        return int(np.sum((pts[:, 0] > fx - 0.06) & (pts[:, 0] < fx + 0.4) & (np.abs(pts[:, 1] - fy) < 0.1)))
+    return min(CORNERS, key=count)
+
+
 def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note=None) -> MapResult:
     shape = (len(h), len(v))
     X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
@@ -64,11 +78,12 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
     cb = fig.colorbar(matplotlib.cm.ScalarMappable(norm=vnorm, cmap=cmap), ax=ax, pad=0.02)
     cb.set_label(BY_NAME["v_mm_s"].label + "  (bands between neighbouring v lines)")
     cb.set_ticks(v if len(v) <= 12 else np.linspace(v.min(), v.max(), 6))
-    # one DEM run's noise: a cross in the lower left corner
+    # one DEM run's noise: a cross (and its note to the right of it) in the corner the map leaves emptiest
     nx, ny = float(np.median(grid["mfr_noise_sd"])), float(np.median(grid[f"{y}_noise_sd"]))
     x0, x1 = ax.get_xlim()
     y0, y1 = ax.get_ylim()
-    cx, cy = x0 + 0.08 * (x1 - x0) + nx, y1 - 0.1 * (y1 - y0) - ny
+    fx, fy = emptiest_corner(ax, X.ravel(), Y.ravel())
+    cx, cy = x0 + fx * (x1 - x0) + nx, y0 + fy * (y1 - y0) + (ny if fy < 0.5 else -ny)
     ax.errorbar([cx], [cy], xerr=[nx], yerr=[ny], color="darkred", capsize=3, lw=1.2, zorder=6)
     ax.annotate(f"± one DEM run's noise SD\n(MFR {nx:.3f}, {SHORT.get(y, y)} {ny:.3f})", (cx + nx, cy),
                 xytext=(6, 0), textcoords="offset points", va="center", fontsize=7.5, color="darkred")
