@@ -80,6 +80,8 @@ def test_snakemake_plans_no_run_for_a_restored_case(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert tool.returncode == 0, tool.stderr
     assert "loop steps" in tool.stdout
+    # the held-out check's predictions, made before its runs, come back for scoring
+    assert (wf / "heldout" / "predictions.csv").read_text() == (STUDY / "heldout" / "predictions.csv").read_text()
     after = snakemake(wf, "-n", "results/tables/lds.csv")
     assert after.returncode == 0, after.stderr[-3000:]
     jobs = planned_jobs(after.stdout)

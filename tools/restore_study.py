@@ -8,13 +8,15 @@ Snakemake re-uses them instead of re-running them.
 Restores every case of the published cases tables (cases_*.csv, thin_gap_seeds.csv): its
 metrics.json and benchmark.tsv from the published row, and restored.json saying so
 (spreadmap/restore.py); a case folder with a raw YADE record is left alone. Then the loop's step
-records (converge/steps/step_N.json), newer than the cases in the order they were made. The raw
+records (converge/steps/step_N.json), newer than the cases in the order they were made, and the
+held-out check's files (heldout/: its points and the predictions made before its runs). The raw
 records are not published: a restored case has no picture, VTK export or re-read of its overlap.
 Check with `snakemake -n` in WORKDIR that only unfinished cases would run.
 """
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -39,6 +41,14 @@ def main(argv=None) -> int:
     base = time.time() - 3600
     counts = restore_cases(tables, args.workdir, mtime=base)
     steps = restore_steps(sorted((args.published / "converge" / "steps").glob("step_*.json")), args.workdir, mtime=base)
+    # the held-out check's points and predictions (made before its runs): scoring needs them
+    held = [f for f in sorted((args.published / "heldout").glob("*.csv"))
+            if not (args.workdir / "heldout" / f.name).exists()]
+    for f in held:
+        (args.workdir / "heldout").mkdir(exist_ok=True)
+        shutil.copyfile(f, args.workdir / "heldout" / f.name)
+    if held:
+        print(f"restore_study: heldout/ {', '.join(f.name for f in held)}")
     print(f"restore_study: {counts['restored']} cases restored from {len(tables)} tables "
           f"({counts['kept_real']} left alone: they hold a raw record; {counts['not_finished']} not finished: "
           f"they will run; {counts['duplicates']} listed twice), "
