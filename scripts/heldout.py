@@ -65,7 +65,8 @@ def score(args) -> int:
               f"{args.level:.0%} intervals (coverage {summary['coverage']:.2f}, 95 % CI "
               f"{summary['coverage_low']:.2f}-{summary['coverage_high']:.2f}); RMSE {summary['rmse']:.4f} against "
               f"{summary['rmse_expected']:.4f} expected from the stated SDs; mean z^2 {summary['mean_z2']:.2f} "
-              f"(p = {summary['p_sd_right']:.2g} for 'the SDs are right')")
+              f"(p = {summary['p_sd_right']:.2g} for 'the SDs are too small', "
+              f"{summary['p_sd_too_wide']:.2g} for 'too large')")
     if args.out:
         write_csv(pd.concat(tables, ignore_index=True), args.out)
         Path(args.out).with_suffix(".json").write_text(json.dumps(summaries, indent=1))

@@ -165,7 +165,8 @@ def _heldout(study: Path) -> list[str]:
                      f"{100 * r['level']:g} % prediction intervals (coverage {r['coverage']:.2f}, 95 % CI "
                      f"{r['coverage_low']:.2f}-{r['coverage_high']:.2f}); RMSE {r['rmse']:.4f} against "
                      f"{r['rmse_expected']:.4f} expected from the stated SDs (mean z^2 {r['mean_z2']:.2f}, "
-                     f"p = {r['p_sd_right']:.2g} for 'the SDs are right')")
+                     f"p = {r['p_sd_right']:.2g} for 'the SDs are too small', "
+                     f"{r.get('p_sd_too_wide', float('nan')):.2g} for 'too large')")
     table = _read_csv(study / "heldout" / "score.csv")
     if table is not None and "inside" in table:
         outside = table[~table["inside"].astype(bool)]

@@ -62,11 +62,23 @@ def test_overconfident_intervals_are_caught():
     rng = np.random.default_rng(12)
     pred, cases = synthetic(rng, 40, 4, 0.06, 0.03, 0.01)  # the model claims 0.01, is off by 0.06
     table, s = score(pred, cases, "mfr")
-    assert s["coverage_high"] < 0.95 and s["p_sd_right"] < 1e-3
+    assert s["coverage_high"] < 0.95 and s["p_sd_right"] < 1e-3 and s["p_sd_too_wide"] > 0.999
     assert s["rmse"] > 2 * s["rmse_expected"]
     # the seed mean of 4 runs: SD sqrt(0.01^2 + 0.03^2 / 4)
     assert table["sd_of_mean"].iloc[0] == pytest.approx(np.sqrt(0.01 ** 2 + 0.03 ** 2 / 4))
     assert (table["n_runs"] == 4).all()
+
+
+def test_underconfident_intervals_are_caught_by_the_other_tail():
+    """A model right to 0.002 that states 0.03, with runs of noise 0.01 stated as 0.03: every point
+    inside, and the lower tail of the chi-square test says the SDs are too large."""
+    rng = np.random.default_rng(14)
+    pred, cases = synthetic(rng, 12, 4, 0.002, 0.01, 0.03)
+    pred["mfr_run_sd"] = np.sqrt(0.03 ** 2 + 0.03 ** 2)
+    _, s = score(pred, cases, "mfr")
+    assert s["inside"] == 12 and s["mean_z2"] < 0.2
+    assert s["p_sd_too_wide"] < 1e-3 and s["p_sd_right"] > 0.999
+    assert s["p_sd_right"] + s["p_sd_too_wide"] == pytest.approx(1.0)
 
 
 def test_points_without_runs_are_left_out_and_none_at_all_is_an_error():

@@ -50,7 +50,8 @@ def score(predictions: pd.DataFrame, cases: pd.DataFrame, target: str, level: fl
     Returns the per-point table (mean, n, prediction, sd, z, inside) and the summary: coverage of
     the `level` intervals with its Clopper-Pearson interval (scipy.stats.binomtest), RMSE of the
     seed means against the prediction and the RMSE the stated SDs predict, the mean of z^2 (1 when
-    the SDs are right)."""
+    the SDs are right) and its chi-square test's two tails: ``p_sd_right`` (small when the SDs are
+    too small: the intervals too narrow) and ``p_sd_too_wide`` (small when they are too large)."""
     z_level = stats.norm.ppf(0.5 + level / 2.0)
     by_point = cases.groupby("name")[target].agg(["mean", "count", "std"]).rename(
         columns={"mean": "seed_mean", "count": "n_runs", "std": "seed_sd"})
@@ -70,8 +71,10 @@ def score(predictions: pd.DataFrame, cases: pd.DataFrame, target: str, level: fl
                "rmse": float(np.sqrt(np.mean(table["error"] ** 2))),
                "rmse_expected": float(np.sqrt(np.mean(table["sd_of_mean"] ** 2))),
                "mean_z2": float(np.mean(table["z"] ** 2)),
-               # chi-square test of "the stated SDs are right": sum z^2 ~ chi2(n)
-               "p_sd_right": float(stats.chi2.sf(np.sum(table["z"] ** 2), n))}
+               # chi-square tests of "the stated SDs are right": sum z^2 ~ chi2(n); the upper tail asks
+               # whether they are too small (intervals too narrow), the lower tail whether too large
+               "p_sd_right": float(stats.chi2.sf(np.sum(table["z"] ** 2), n)),
+               "p_sd_too_wide": float(stats.chi2.cdf(np.sum(table["z"] ** 2), n))}
     return table.reset_index(), summary
 
 
