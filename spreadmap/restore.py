@@ -57,10 +57,11 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
     """Write metrics.json, benchmark.tsv and restored.json of every case of the published tables
     under workdir/results/cases/<case_id>/ (a case in two tables once, from the first). Cases with a
     raw record are skipped, and so are cases that did not finish (status other than ok: failed,
-    refused, ...), which the workflow then runs again; a case already restored is rewritten.
-    Returns counts."""
+    refused, ...), which the workflow then runs again, and cases restored before (so that running
+    the tool again after a table has grown adds the new cases and leaves the rest, and their
+    steps, up to date). Returns counts."""
     workdir = Path(workdir)
-    counts = {"restored": 0, "kept_real": 0, "duplicates": 0, "not_finished": 0}
+    counts = {"restored": 0, "kept_real": 0, "duplicates": 0, "not_finished": 0, "already": 0}
     seen = set()
     for table_path in tables:
         table = pd.read_csv(table_path)
@@ -76,6 +77,10 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
             folder = workdir / "results" / "cases" / cid
             if (folder / "raw.json").exists():
                 counts["kept_real"] += 1
+                continue
+            if (folder / RESTORED).exists() and (folder / "metrics.json").exists():
+                # restored before: left as it is (a new mtime would make the steps after it stale)
+                counts["already"] += 1
                 continue
             if row.get("status") != "ok":  # a case that did not finish gets a new try on this machine
                 counts["not_finished"] += 1

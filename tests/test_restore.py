@@ -31,7 +31,7 @@ def test_the_restored_cases_give_back_the_published_table(tmp_path):
     column for column, once both are read as CSV."""
     published = pd.read_csv(STUDY / "cases_converge.csv")
     counts = restore_cases([STUDY / "cases_converge.csv"], tmp_path, mtime=1.0e9)
-    assert counts == {"restored": len(published), "kept_real": 0, "duplicates": 0, "not_finished": 0}
+    assert counts == {"restored": len(published), "kept_real": 0, "duplicates": 0, "not_finished": 0, "already": 0}
     rebuilt_csv = tmp_path / "rebuilt.csv"
     _restored_table(tmp_path, published).to_csv(rebuilt_csv, index=False)
     rebuilt = pd.read_csv(rebuilt_csv)
@@ -40,6 +40,10 @@ def test_the_restored_cases_give_back_the_published_table(tmp_path):
     assert published["flagged"].dtype == bool and published["reason"].isna().all()  # the empty cells went through
     record = json.loads((tmp_path / "results/cases" / published["case_id"][3] / "restored.json").read_text())
     assert record["row"] == 3 and record["restored_from"].endswith("cases_converge.csv")
+    assert os.path.getmtime(tmp_path / "results/cases" / published["case_id"][3] / "metrics.json") == 1.0e9
+    # run again (a table grew): the cases restored before keep their files and times
+    again = restore_cases([STUDY / "cases_converge.csv"], tmp_path, mtime=2.0e9)
+    assert again["already"] == len(published) and again["restored"] == 0
     assert os.path.getmtime(tmp_path / "results/cases" / published["case_id"][3] / "metrics.json") == 1.0e9
 
 

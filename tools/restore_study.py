@@ -50,7 +50,8 @@ def main(argv=None) -> int:
     if held:
         print(f"restore_study: heldout/ {', '.join(f.name for f in held)}")
     print(f"restore_study: {counts['restored']} cases restored from {len(tables)} tables "
-          f"({counts['kept_real']} left alone: they hold a raw record; {counts['not_finished']} not finished: "
+          f"({counts['already']} restored before; {counts['kept_real']} left alone: they hold a raw record; "
+          f"{counts['not_finished']} not finished: "
           f"they will run; {counts['duplicates']} listed twice), "
           f"{len(steps)} loop steps ({', '.join(steps) or 'none new'})")
     return 0
