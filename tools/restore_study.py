@@ -5,7 +5,7 @@ Snakemake re-uses them instead of re-running them.
 
     .venv/bin/python tools/restore_study.py WORKDIR [--published docs/study]
 
-Restores every case of the published cases tables (cases_*.csv, thin_gap_seeds.csv): its
+Restores every case of the published cases tables (cases_*.csv, the seed repeats *_seeds.csv): its
 metrics.json and benchmark.tsv from the published row, and restored.json saying so
 (spreadmap/restore.py); a case folder with a raw YADE record is left alone. Then the loop's step
 records (converge/steps/step_N.json), newer than the cases in the order they were made, and the
@@ -34,7 +34,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     if not (args.workdir / "Snakefile").exists():
         parser.error(f"{args.workdir}: not a workflow directory (no Snakefile)")
-    tables = sorted(args.published.glob("cases_*.csv")) + sorted(args.published.glob("thin_gap_seeds.csv"))
+    tables = sorted(args.published.glob("cases_*.csv")) + sorted(args.published.glob("*_seeds.csv"))
     if not tables:
         parser.error(f"{args.published}: no cases_*.csv")
     # an hour in the past, so that anything the resumed run makes is newer
