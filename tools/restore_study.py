@@ -40,7 +40,7 @@ def main(argv=None) -> int:
     # an hour in the past, so that anything the resumed run makes is newer
     base = time.time() - 3600
     counts = restore_cases(tables, args.workdir, mtime=base)
-    steps = restore_steps(sorted((args.published / "converge" / "steps").glob("step_*.json")), args.workdir, mtime=base)
+    steps = restore_steps(list((args.published / "converge" / "steps").glob("step_*.json")), args.workdir, mtime=base)
     # the held-out check's points and predictions (made before its runs): scoring needs them
     held = [f for f in sorted((args.published / "heldout").glob("*.csv"))
             if not (args.workdir / "heldout" / f.name).exists()]
