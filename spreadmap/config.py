@@ -34,6 +34,7 @@ def _describe(error: jsonschema.ValidationError) -> str:
         "type": lambda s: f"of type {s['type']}",
         "required": lambda s: f"present (required keys: {s['required']})",
         "minProperties": lambda s: f"a mapping with at least {s['minProperties']} entry",
+        "anyOf": _any_of,
     }
     validator = error.validator
     if validator == "additionalProperties":
@@ -48,6 +49,14 @@ def _describe(error: jsonschema.ValidationError) -> str:
     if validator == "type" and _yaml_float(error.instance):
         message += f" (YAML 1.1 reads {error.instance} as a string: write {_yaml_float(error.instance)})"
     return message
+
+
+def _any_of(schema: dict) -> str:
+    """The anyOf rule in words: at least one of some keys (the schema's only use of it), or as named."""
+    options = schema["anyOf"]
+    if all(set(option) == {"required"} for option in options):
+        return f"a mapping with at least one of the keys {[key for option in options for key in option['required']]}"
+    return "valid per the schema rule 'anyOf'"
 
 
 def _yaml_float(value) -> str | None:
@@ -98,6 +107,10 @@ def _check_cross_keys(config: dict) -> None:
     for name, rng in (config.get("ranges") or {}).items():
         if not rng["min"] < rng["max"]:
             raise ConfigError(f"config key 'ranges.{name}': min {rng['min']} must be below max {rng['max']}")
+    for i, region in enumerate(config.get("noise_calibration") or []):
+        if region.get("h_over_d_from", 0.0) >= region.get("h_over_d_below", float("inf")):
+            raise ConfigError(f"config key 'noise_calibration[{i}]': h_over_d_from {region['h_over_d_from']} "
+                              f"must be below h_over_d_below {region['h_over_d_below']} (the region is empty)")
     named = set(((config.get("points") or {}).get("named") or {}))
     for key in ("cases", "vtk"):
         for name in (config.get("pictures") or {}).get(key, []):

@@ -26,6 +26,10 @@ def raw_config():
     (lambda c: c["presets"]["smoke"].update(dt_factor=1.5), r"'presets\.smoke\.dt_factor': value 1\.5 .* must be <= 1"),
     (lambda c: c.update(noise_calibration=[{"h_over_d_below": 2, "factor": -1}]),
      r"'noise_calibration\[0\]\.factor': value -1 .* must be > 0"),
+    (lambda c: c.update(noise_calibration=[{"factor": 0.6}]),
+     r"'noise_calibration\[0\]': .* must be a mapping with at least one of the keys \['h_over_d_below', 'h_over_d_from'\]"),
+    (lambda c: c.update(noise_calibration=[{"h_over_d_from": 3, "h_over_d_below": 2, "factor": 0.6}]),
+     r"'noise_calibration\[0\]': h_over_d_from 3 must be below h_over_d_below 2 \(the region is empty\)"),
 ])
 def test_bad_values_are_refused_with_the_key_named(raw_config, change, message):
     change(raw_config)

@@ -113,16 +113,22 @@ def pooled_constant(cells: pd.DataFrame, name: str, level: float = 0.9) -> tuple
 NOISE_SD_COLUMNS = ("mfr_sd", "pd_sd", "layer_packing_sd", "coverage_sd", "roughness_d_sd", "thickness_ratio_sd")
 
 
-def calibration_factors(table: pd.DataFrame, calibration: list[dict] | None) -> np.ndarray:
-    """Per row, the factor its stated noise SDs are scaled by: the `factor` of the first region of
-    `calibration` the case lies in (a region is h/d below `h_over_d_below`), 1 outside every one."""
+def calibration_factors(table: pd.DataFrame, calibration: list[dict] | None, target: str | None = None) -> np.ndarray:
+    """Per row, the factor the stated noise SD of `target` (a target name, e.g. "mfr") is scaled
+    by: the `factor` of the first region of `calibration` the case lies in that applies to the
+    target (a region is h/d from `h_over_d_from`, inclusive, to below `h_over_d_below`, a bound
+    left out being open; it applies to the targets it lists under `targets`, to every one if it
+    lists none), 1 outside every such region."""
     factors = np.ones(len(table))
     if not calibration or table.empty:
         return factors
     h_over_d = (pd.to_numeric(table["h_um"], errors="coerce") / pd.to_numeric(table["d_um"], errors="coerce")).to_numpy(float)
     placed = np.zeros(len(table), dtype=bool)
     for region in calibration:
-        inside = ~placed & (h_over_d < float(region["h_over_d_below"]))
+        if target is not None and region.get("targets") and target not in region["targets"]:
+            continue
+        below = float(region.get("h_over_d_below", np.inf))
+        inside = ~placed & (h_over_d >= float(region.get("h_over_d_from", 0.0))) & (h_over_d < below)
         factors[inside] = float(region["factor"])
         placed |= inside
     return factors
@@ -135,8 +141,7 @@ def calibrated_noise(table: pd.DataFrame, calibration: list[dict] | None) -> pd.
     are; every analysis that weighs cases by their noise (the loop's criteria and model, the
     surrogate, the maps) reads the calibrated SDs."""
     out = table.copy()
-    factors = calibration_factors(out, calibration)
     for col in NOISE_SD_COLUMNS:
         if col in out.columns:
-            out[col] = pd.to_numeric(out[col], errors="coerce") * factors
+            out[col] = pd.to_numeric(out[col], errors="coerce") * calibration_factors(out, calibration, col.removesuffix("_sd"))
     return out

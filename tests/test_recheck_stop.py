@@ -1,0 +1,49 @@
+"""tools/recheck_stop.py: the published loop's last step decided again under another noise
+calibration. Checked against the step the loop itself recorded, and the noise it is held against
+recomputed here from the cases table with numpy (h/d masks written out, not calibrated_noise)."""
+import importlib.util
+import json
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from conftest import ROOT
+
+STUDY = ROOT / "docs" / "study"
+_spec = importlib.util.spec_from_file_location("recheck_stop", ROOT / "tools" / "recheck_stop.py")
+recheck_stop = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(recheck_stop)
+
+
+def test_the_published_stop_holds_under_the_shipped_calibration_and_matches_the_loops_own_step():
+    from spreadmap import config as spreadmap_config
+
+    cfg = spreadmap_config.load(STUDY / "config.yaml")
+    table = pd.read_csv(STUDY / "cases_converge.csv")
+    previous, last = recheck_stop.last_two_steps(STUDY / "converge" / "steps")
+    assert (previous["n"], last["n"], last["stop"]) == (288, 304, True)
+    shipped = yaml.safe_load((ROOT / "config.yaml").read_text())["noise_calibration"]
+    record = recheck_stop.recheck(table, cfg, last, previous, shipped)
+    assert record["stop"] and record["n"] == 304
+    cv = record["criteria"]["at_this_batch"]["cv_rmse"]["targets"]
+    own = last["criteria"]["at_this_batch"]["cv_rmse"]["targets"]
+    lds = table[np.asarray(last["is_lds"], bool)]
+    h_over_d = lds["h_um"] / lds["d_um"]
+    factor = np.where(h_over_d < 2.0, 1.37, np.where(h_over_d >= 3.0, 0.61, 1.0))
+    for target in ("mfr", "pd"):
+        noise = np.sqrt(np.mean((lds[f"{target}_sd"] * factor) ** 2))
+        assert abs(cv[target]["noise_sd"] - noise) < 1e-9
+        assert abs(cv[target]["threshold"] - 1.2 * noise) < 1e-9
+        # the GP fitted anew: the loop's own RMSE (thin-gap band only) within 5 %
+        assert abs(cv[target]["rmse"] / own[target]["rmse"] - 1.0) < 0.05
+        assert cv[target]["ratio"] < 1.0
+    lines = recheck_stop.cv_lines("shipped", record)
+    assert lines[0].startswith("shipped: stops") and "x the threshold" in lines[1]
+
+
+def test_a_file_without_a_calibration_is_refused(tmp_path, capsys):
+    bad = tmp_path / "other.yaml"
+    bad.write_text(json.dumps({"preset": "default"}))
+    assert recheck_stop.main(["--calibration", str(bad)]) == 2
+    assert "no noise_calibration key" in capsys.readouterr().err

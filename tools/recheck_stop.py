@@ -1,0 +1,87 @@
+#!/usr/bin/env python
+"""Re-evaluate a published loop's last step under other noise calibrations: would it have stopped?
+
+    .venv/bin/python tools/recheck_stop.py [--published docs/study] [--calibration FILE.yaml ...]
+
+The loop's last step (converge/steps/step_N.json, after N cases) is decided again from the
+published cases table (cases_converge.csv, in the loop's run order) and the step before it, with
+the stated noise SDs, with the published config's `noise_calibration`, and with that of each
+`--calibration` file (a YAML file with a `noise_calibration` key, e.g. a config.yaml). Prints, per
+calibration and target, the CV RMSE, the noise it is held against, the threshold and their ratio
+(below 1: the criterion holds), and whether every criterion holds. The GP is fitted anew each
+time (one restart, as in the loop), so the RMSE differs from the step's own by the fit's noise.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import yaml
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import pandas as pd  # noqa: E402
+
+from spreadmap import config as spreadmap_config  # noqa: E402
+from spreadmap.convergence.model import make_gp_fit  # noqa: E402
+from spreadmap.convergence.stepper import step  # noqa: E402
+from spreadmap.metrics.noise import calibrated_noise  # noqa: E402
+from spreadmap.restore import step_number  # noqa: E402
+
+
+def last_two_steps(steps_dir: Path) -> tuple[dict, dict]:
+    paths = sorted(steps_dir.glob("step_*.json"), key=step_number)
+    if len(paths) < 2:
+        raise ValueError(f"{steps_dir}: fewer than two loop steps")
+    return tuple(json.loads(p.read_text()) for p in paths[-2:])
+
+
+def recheck(table: pd.DataFrame, cfg: dict, last: dict, previous: dict, calibration: list) -> dict:
+    """The last step decided again with the cases' noise SDs calibrated by `calibration`."""
+    n = int(last["n"])
+    if len(table) != n:
+        raise ValueError(f"the last step is after {n} cases; the cases table has {len(table)} usable rows")
+    return step(calibrated_noise(table, calibration), n, cfg["converge"], previous,
+                fit=make_gp_fit(cfg["ranges"], n_restarts=1), ranges=cfg["ranges"], maps_cfg=cfg.get("maps", {}),
+                lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["convergence"].get("tolerance", 0.005),
+                floors=cfg["convergence"].get("floors"))
+
+
+def cv_lines(name: str, record: dict) -> list[str]:
+    criteria = record["criteria"].get("at_this_batch", record["criteria"])
+    lines = [f"{name}: {'stops' if record['stop'] else 'goes on'} ({record['reason']})"]
+    for target, cv in criteria["cv_rmse"]["targets"].items():
+        lines.append(f"  {target}: CV RMSE {cv['rmse']:.4f}, noise {cv['noise_sd']:.4f}, threshold {cv['threshold']:.4f}"
+                     f" -> {cv['ratio']:.2f}x the threshold")
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--published", default=str(Path(__file__).resolve().parents[1] / "docs" / "study"))
+    parser.add_argument("--calibration", nargs="*", default=[], help="YAML files with a noise_calibration key")
+    args = parser.parse_args(argv)
+    published = Path(args.published)
+    try:
+        cfg = spreadmap_config.load(published / "config.yaml")
+        table = pd.read_csv(published / "cases_converge.csv")
+        previous, last = last_two_steps(published / "converge" / "steps")
+        variants = [("stated SDs", []), (f"{published / 'config.yaml'}", cfg.get("noise_calibration", []))]
+        for path in args.calibration:
+            calibration = (yaml.safe_load(Path(path).read_text()) or {}).get("noise_calibration")
+            if calibration is None:
+                raise ValueError(f"{path}: no noise_calibration key")
+            variants.append((path, spreadmap_config.validate({**cfg, "noise_calibration": calibration})["noise_calibration"]))
+    except (OSError, ValueError, spreadmap_config.ConfigError) as error:
+        print(f"recheck_stop: {error}", file=sys.stderr)
+        return 2
+    print(f"the loop's step after {last['n']} cases (it {'stopped' if last['stop'] else 'went on'}), decided again:")
+    for name, calibration in variants:
+        print("\n".join(cv_lines(f"{name} {calibration}", recheck(table, cfg, last, previous, calibration))))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
