@@ -11,6 +11,7 @@ regimes, the flagged cases).
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,7 @@ import pandas as pd
 from scipy.stats import qmc
 
 from spreadmap.design import NAMES, bounds
+from spreadmap.surrogate.validation import by_band
 
 NOT_YET = "not yet run"
 
@@ -146,12 +148,35 @@ def _surrogate(study: Path) -> list[str]:
                      f"the noise SD {r['noise_sd']:.4f}; {100 * r['level']:g} % intervals cover "
                      f"{100 * r['coverage']:.0f} % ({100 * r['coverage_low']:.0f}-{100 * r['coverage_high']:.0f} %) "
                      f"of {r['n_predictions']} predictions of {r['n_cases']} cases")
+    lines += _intervals_by_band(study, metrics)
     mlp = _read_csv(study / "surrogate" / "surrogate_r2_vs_neurons.csv")
     if mlp is not None:
         for r in mlp[mlp["chosen"]].to_dict("records"):
             lines.append(f"- The study's MLP protocol, {r['target']}: R^2 {r['r2_mean']:.2f} on its 20 % test share "
                          f"(range {r['r2_min']:.2f} to {r['r2_max']:.2f} over {r['n_seeds']} seeds) at {r['neurons']} "
                          f"neurons, trained on {r['n_train']} cases (train R^2 {r['r2_train_mean']:.2f})")
+    return lines
+
+
+def _intervals_by_band(study: Path, metrics: pd.DataFrame) -> list[str]:
+    """The maps' model's out-of-fold intervals by band of h/d (spreadmap.surrogate.validation.by_band),
+    for MFR and PD, from the parity table and the h/d of the loop's cases."""
+    parity, cases = _read_csv(study / "surrogate" / "surrogate_parity.csv"), _read_csv(study / "cases_converge.csv")
+    map_model = metrics.loc[metrics["map_model"].astype(bool), "model"] if "map_model" in metrics else pd.Series([], dtype=object)
+    if parity is None or cases is None or map_model.empty:
+        return []
+    h_over_d = (cases["h_um"] / cases["d_um"]).groupby(cases["case_id"]).first()
+    lines = []
+    for target in ("mfr", "pd"):
+        oof = parity[(parity["model"] == map_model.iloc[0]) & (parity["target"] == target)]
+        if oof.empty:
+            continue
+        bands = by_band(oof, h_over_d)
+        lines.append(f"- {target} ({map_model.iloc[0]}), its intervals by h/d (out of fold; z = error / the interval's SD, "
+                     f"mean z^2 1 where they are right, below 1 where wide): " + "; ".join(
+                         f"{r['h_over_d']}: {r['cases']} cases, error {r['rmse']:.4f} against the cases' noise "
+                         f"{r['case_sd']:.4f}, interval SD {r['interval_sd']:.4f} (the model's {r['model_sd']:.4f}), "
+                         f"mean z^2 {r['mean_z2']:.2f}, {100 * r['inside']:.0f} % inside" for r in bands.to_dict("records")))
     return lines
 
 
@@ -230,10 +255,29 @@ def _regimes(study: Path) -> list[str]:
                      f"{group['h_over_d'].max():.2f}, v {group['v_mm_s'].min():.1f}-{group['v_mm_s'].max():.1f} mm/s")
     if "flagged" in cases:
         flagged = cases[cases["flagged"].fillna(False).astype(bool)]
-        where = (f": h/d {flagged['h_over_d'].min():.2f}-{flagged['h_over_d'].max():.2f}, d "
-                 f"{flagged['d_um'].min():.0f}-{flagged['d_um'].max():.0f} um" if len(flagged) else "")
+        where = (f": h/d {_span(flagged['h_over_d'], '.2f')}, d {_span(flagged['d_um'], '.0f')} um, "
+                 f"v {_span(flagged['v_mm_s'], '.1f')} mm/s{_flag_causes(flagged)}" if len(flagged) else "")
         lines.append(f"- flagged (kept out of training): {len(flagged)} of {len(cases)} cases{where}")
     return lines
+
+
+def _span(values: pd.Series, fmt: str) -> str:
+    """'a-b' of a column's range, 'a' where it is one value."""
+    low, high = format(values.min(), fmt), format(values.max(), fmt)
+    return low if low == high else f"{low}-{high}"
+
+
+def _flag_causes(flagged: pd.DataFrame) -> str:
+    """'; why: <cause> (count), ...' over the flagged cases' reasons: each reason's cause is what
+    follows its last ': ' (e.g. 'the pile ran down'), or the reason with its numbers as '#'."""
+    if "flag_reason" not in flagged:
+        return ""
+    causes = []
+    for reason in flagged["flag_reason"].fillna(""):
+        for part in filter(None, (p.strip() for p in str(reason).split(";"))):
+            causes.append(part.rsplit(": ", 1)[1] if ": " in part else re.sub(r"\d+(\.\d+)?(e[-+]?\d+)?", "#", part))
+    counts = pd.Series(causes, dtype=object).value_counts()
+    return "; why: " + ", ".join(f"{cause} ({n})" for cause, n in counts.items()) if len(counts) else ""
 
 
 def summary_markdown(study: Path | str, ranges: dict | None = None) -> str:

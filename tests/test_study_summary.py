@@ -48,7 +48,9 @@ def test_the_summary_answers_from_the_files_and_says_what_has_not_run(tmp_path):
                   {"target": "mfr", "parameter": "v_mm_s", "ST": 0.1, "ST_low": 0.02, "ST_high": 0.2, "rank_ST": "2-3"},
                   {"target": "mfr", "parameter": "f", "ST": 0.12, "ST_low": 0.05, "ST_high": 0.2, "rank_ST": "2-3"}]
                  ).to_csv(tmp_path / "maps" / "sensitivity_ranking_table.csv", index=False)
-    pd.DataFrame([{"case_id": f"c{i}", "status": "ok", "regime": r, "h_um": 55.0, "d_um": d, "v_mm_s": v, "flagged": i == 0}
+    reasons = ["flow fell by 15% over the window (-4.6 SE): the pile ran down", "", ""]
+    pd.DataFrame([{"case_id": f"c{i}", "status": "ok", "regime": r, "h_um": 55.0, "d_um": d, "v_mm_s": v, "flagged": i == 0,
+                   "flag_reason": reasons[i]}
                   for i, (r, d, v) in enumerate([("jamming", 50, 5), ("jamming", 45, 6), ("normal", 20, 10)])]
                  ).to_csv(tmp_path / "cases_lds.csv", index=False)
     text = summary_markdown(tmp_path, RANGES)
@@ -59,7 +61,8 @@ def test_the_summary_answers_from_the_files_and_says_what_has_not_run(tmp_path):
     assert mfr.index("f 0.12") < mfr.index("v_mm_s 0.10")  # ordered by the total index
     assert "do not separate the ranks 2-3" in mfr
     assert "- jamming: 2 of 3 cases; h/d 1.10-1.22, v 5.0-6.0 mm/s" in text
-    assert "- flagged (kept out of training): 1 of 3 cases: h/d 1.10-1.10, d 50-50 um" in text
+    assert ("- flagged (kept out of training): 1 of 3 cases: h/d 1.10, d 50 um, v 5.0 mm/s; "
+            "why: the pile ran down (1)") in text
     assert text.count(NOT_YET) == 4  # the rule, the surrogate's metrics, the held-out check, the trends
 
 
@@ -101,3 +104,35 @@ def test_a_loop_still_running_is_reported_from_its_last_step(tmp_path):
     text = summary_markdown(tmp_path)
     assert "still running: 3 steps so far" in text and "after 112 cases: criteria not met yet" in text
     assert "after 48 cases" not in text
+
+
+def test_flag_causes_are_counted_by_their_cause_with_numbers_hidden():
+    from spreadmap.study_summary import _flag_causes
+
+    flagged = pd.DataFrame({"flag_reason": [
+        "flow fell by 15% over the window (-4.6 SE): the pile ran down",
+        "peak overlap 0.112 R > 0.1 R; flow fell by 18% over the window (-5.8 SE): the pile ran down",
+        "peak overlap 0.13 R > 0.1 R", None]})
+    assert _flag_causes(flagged) == "; why: the pile ran down (2), peak overlap # R > # R (2)"
+    assert _flag_causes(pd.DataFrame({"flag_reason": [""]})) == ""
+
+
+def test_the_summary_states_the_map_models_intervals_by_h_over_d(tmp_path):
+    (tmp_path / "surrogate").mkdir()
+    metrics = {"n_predictions": 4, "n_cases": 4, "rmse": 0.01, "rmse_low": 0.01, "rmse_high": 0.01, "rmse_over_noise": 1.0,
+               "noise_sd": 0.01, "level": 0.95, "coverage": 1.0, "coverage_low": 1.0, "coverage_high": 1.0}
+    pd.DataFrame([{**metrics, "target": "mfr", "model": "gp", "map_model": True},
+                  {**metrics, "target": "mfr", "model": "mlp", "map_model": False}]
+                 ).to_csv(tmp_path / "surrogate" / "surrogate_metrics.csv", index=False)
+    rows = [{"case_id": c, "target": "mfr", "model": m, "y": 0.5 + e, "mean": 0.5, "run_sd": 0.02, "model_sd": 0.01,
+             "case_sd": 0.015} for c, e in (("a", 0.01), ("b", -0.01)) for m in ("gp", "mlp")]
+    rows.append({"case_id": "a", "target": "mfr", "model": "mlp", "y": 0.9, "mean": 0.5, "run_sd": 0.02, "model_sd": 0.01,
+                 "case_sd": 0.015})  # the other model's prediction: not read
+    pd.DataFrame(rows).to_csv(tmp_path / "surrogate" / "surrogate_parity.csv", index=False)
+    pd.DataFrame({"case_id": ["a", "b"], "h_um": [60.0, 60.0], "d_um": [40.0, 15.0], "status": "ok", "regime": "normal",
+                  "v_mm_s": 10.0, "flagged": False}).to_csv(
+        tmp_path / "cases_converge.csv", index=False)
+    line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp), its intervals"))
+    assert ("1.5-2: 1 cases, error 0.0100 against the cases' noise 0.0150, interval SD 0.0200 (the model's 0.0100), "
+            "mean z^2 0.25, 100 % inside") in line
+    assert ">= 3: 1 cases, error 0.0100" in line and "0-1.5" not in line

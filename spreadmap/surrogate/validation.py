@@ -98,3 +98,26 @@ def per_case(oof: pd.DataFrame) -> pd.DataFrame:
     return oof.groupby("case_id", sort=False).agg(
         y=("y", "first"), case_sd=("case_sd", "first"), mean=("mean", "mean"),
         model_sd=("model_sd", "mean"), run_sd=("run_sd", "mean")).reset_index()
+
+
+def by_band(oof: pd.DataFrame, h_over_d: pd.Series, edges=(0.0, 1.5, 2.0, 3.0, np.inf), level: float = 0.95) -> pd.DataFrame:
+    """The out-of-fold predictions of one (model, target) against their intervals, by band of h/d
+    (``h_over_d``: per case id; a band is [edge, next edge)). Per band: cases, the RMS error, the
+    RMS of the cases' own noise SDs, the RMS of the interval's SD (``run_sd``: model and noise of a
+    new run) and of the model's SD alone, the mean z^2 (z = error / run_sd: 1 where the intervals
+    are right, below 1 where they are wide) and the share inside the ``level`` interval."""
+    z_level = stats.norm.ppf(0.5 + level / 2)
+    hd = oof["case_id"].map(h_over_d)
+    if hd.isna().any():
+        raise ValueError(f"no h/d for the cases {sorted(oof.loc[hd.isna(), 'case_id'].unique())[:3]}...")
+    labels = [f"{lo:g}-{hi:g}" if np.isfinite(hi) else f">= {lo:g}" for lo, hi in zip(edges[:-1], edges[1:])]
+    band = pd.cut(hd, list(edges), right=False, labels=labels)
+    z = (oof["y"] - oof["mean"]) / oof["run_sd"]
+    rms = lambda s: float(np.sqrt(np.mean(np.square(s))))  # noqa: E731
+    rows = []
+    for label, idx in oof.groupby(band, observed=True).groups.items():
+        g, zg = oof.loc[idx], z.loc[idx]
+        rows.append({"h_over_d": label, "cases": int(g["case_id"].nunique()), "rmse": rms(g["y"] - g["mean"]),
+                     "case_sd": rms(g["case_sd"]), "interval_sd": rms(g["run_sd"]), "model_sd": rms(g["model_sd"]),
+                     "mean_z2": float(np.mean(zg ** 2)), "inside": float(np.mean(np.abs(zg) <= z_level))})
+    return pd.DataFrame(rows)
