@@ -71,6 +71,8 @@ for _case in planned_cases(config, lds_points=(config.get("converge") or {}).get
         LDS_SEQUENCE.append(add_case(_case.point, preset=_case.preset))
     if _case.in_sweep:
         register(_case.sweep, _case.point, _case.label, preset=_case.preset)
+        if _case.sweep == "lattice":  # one lattice size alone: results/tables/lattice_k3.csv runs k = 3 first
+            register(f"lattice_k{_case.label['k']}", _case.point, _case.label, preset=_case.preset)
 try:
     _points = chosen_points(config.get("points"), workflow.basedir)
 except ValueError as error:

@@ -48,3 +48,17 @@ def test_the_stated_runtime_of_a_reference_case_is_what_snakemake_asks_for(tmp_p
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert f"fixed 2 h timeout asks for {minutes} min" in profile
     assert f"so its jobs ask for {minutes} min" in readme
+
+
+def test_one_lattice_size_plans_alone(tmp_path):
+    """results/tables/lattice_k3.csv: the 3^4 lattice's cases and table, none of the 4^4's (a long
+    study runs the smaller lattice to the end first); the whole lattice's table plans both, the
+    16 corners they share once."""
+    wf = make_workflow(tmp_path, {"sweeps": {"lattice": {"k": [3, 4]}}, "points": {"named": {}},
+                                  "pictures": {"cases": [], "vtk": []}}, DROP)
+    one = snakemake(wf, "-n", "results/tables/lattice_k3.csv")
+    assert one.returncode == 0, one.stderr[-3000:]
+    assert planned_jobs(one.stdout)["run_case"] == 3 ** 4 and planned_jobs(one.stdout)["results_table"] == 1
+    both = snakemake(wf, "-n", "results/tables/lattice.csv")
+    assert both.returncode == 0, both.stderr[-3000:]
+    assert planned_jobs(both.stdout)["run_case"] == 3 ** 4 + 4 ** 4 - 2 ** 4
