@@ -136,3 +136,37 @@ def test_the_summary_states_the_map_models_intervals_by_h_over_d(tmp_path):
     assert ("1.5-2: 1 cases, error 0.0100 against the cases' noise 0.0150, interval SD 0.0200 (the model's 0.0100), "
             "mean z^2 0.25, 100 % inside") in line
     assert ">= 3: 1 cases, error 0.0100" in line and "0-1.5" not in line
+
+
+def test_matched_size_compares_the_lattice_and_the_lds_prefix_with_the_largest_lds_partition(tmp_path):
+    """Both samples' five statistics against LDS 256's, by the study's measure; the numbers checked
+    against numpy and scipy directly (skewness and kurtosis with floor 1, the others relative)."""
+    from scipy import stats
+
+    rng = np.random.default_rng(11)
+    lds = pd.DataFrame({"index": np.arange(256), "sweep": "lds", "status": "ok", "flagged": False,
+                        "mfr": rng.normal(0.45, 0.05, 256), "pd": rng.normal(0.40, 0.06, 256)})
+    lattice = pd.DataFrame({"k": 3, "sweep": "lattice", "status": "ok", "flagged": False,
+                            "mfr": np.tile([0.40, 0.45, 0.50], 27), "pd": np.tile([0.30, 0.40, 0.50], 27)})
+    for name, table in (("lds", lds), ("lattice", lattice)):
+        table.assign(case_id=[f"{name}{i}" for i in range(len(table))], regime="normal", h_um=60.0, d_um=30.0,
+                     v_mm_s=10.0).to_csv(tmp_path / f"cases_{name}.csv", index=False)
+    (tmp_path / "config.yaml").write_text(json.dumps({"sweeps": {"lds": {"partitions": [81, 256]}, "lattice": {"k": [3, 4]}}}))
+    line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- Matched size N = 81"))
+
+    def stats5(x):
+        return {"mean": np.mean(x), "std": np.std(x, ddof=1), "median": np.median(x),
+                "kurtosis": stats.kurtosis(x), "skewness": stats.skew(x)}
+
+    def worst(x, ref):
+        a, b = stats5(ref), stats5(x)
+        floor = {"kurtosis": 1.0, "skewness": 1.0}
+        return max(abs(b[s] - a[s]) / max(abs(a[s]), floor.get(s, 0.0)) for s in a)
+
+    lat = max(worst(lattice[t].to_numpy(), lds[t].to_numpy()) for t in ("mfr", "pd"))
+    pre = max(worst(lds[t].to_numpy()[:81], lds[t].to_numpy()) for t in ("mfr", "pd"))
+    assert f"the LDS's first 81 by at most {100 * pre:.1f} %" in line
+    assert f"the 3^4 lattice by at most {100 * lat:.1f} %" in line
+    assert f"mean MFR {np.mean(lds['mfr'][:81]):.4f}, 0.4500, {np.mean(lds['mfr']):.4f}" in line
+    # the 4^4 lattice has not run: no line for it
+    assert "N = 256" not in "".join(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- Matched"))

@@ -222,6 +222,23 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
     return pd.DataFrame(rows)
 
 
+def difference_from(reference: pd.DataFrame, other: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_TARGETS,
+                    floors: Mapping[str, float] | None = None) -> pd.DataFrame:
+    """How far one sample's five statistics lie from a reference sample's, by the rule's own
+    measure |other - reference| / max(|reference|, floor) (usable rows of each): e.g. a lattice
+    and the LDS partition of the same size, each against the largest LDS partition. One row per
+    target and statistic: ``target``, ``statistic``, ``reference``, ``other``, ``difference``."""
+    fl = _floors(floors)
+    ref, oth = reference[usable_rows(reference)], other[usable_rows(other)]
+    rows = []
+    for t in target_cols:
+        a, b = partition_statistics(ref[t].to_numpy(float)), partition_statistics(oth[t].to_numpy(float))
+        for s in STATISTICS:
+            change = _change_arrays(a[s], b[s], fl[s])[0]
+            rows.append({"target": t, "statistic": s, "reference": a[s], "other": b[s], "difference": float(change)})
+    return pd.DataFrame(rows)
+
+
 def first_converged(conv_df: pd.DataFrame) -> int | None:
     """First partition N at which the criterion holds; None = not converged within the cases run."""
     hit = conv_df.loc[conv_df["converged"].astype(bool), "partition"]
