@@ -164,9 +164,13 @@ def _matched_sizes(lds, lattice, ks, partitions, floors) -> list[str]:
         means = {t: (of_lds.set_index(["target", "statistic"]).loc[(t, "mean"), "other"],
                      of_lattice.set_index(["target", "statistic"]).loc[(t, "mean"), "other"],
                      of_lds.set_index(["target", "statistic"]).loc[(t, "mean"), "reference"]) for t in ("mfr", "pd")}
+        sd = of_lds.set_index(["target", "statistic"])["reference"]
+        scatter = {t: sd.loc[(t, "std")] / np.sqrt(n) for t in ("mfr", "pd")}
         lines.append(f"- Matched size N = {n}, against LDS {max(complete)} (the largest sample): the five statistics of "
                      + " and of ".join(parts) + "; mean MFR " + ", ".join(f"{v:.4f}" for v in means["mfr"])
-                     + " and PD " + ", ".join(f"{v:.4f}" for v in means["pd"]) + f" (LDS {n}, lattice, LDS {max(complete)})")
+                     + " and PD " + ", ".join(f"{v:.4f}" for v in means["pd"]) + f" (LDS {n}, lattice, LDS {max(complete)}; "
+                     f"the mean of {n} random cases would scatter by {scatter['mfr']:.4f} and {scatter['pd']:.4f}, "
+                     f"the SD of LDS {max(complete)} over sqrt({n}))")
     return lines
 
 

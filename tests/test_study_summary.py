@@ -168,5 +168,6 @@ def test_matched_size_compares_the_lattice_and_the_lds_prefix_with_the_largest_l
     assert f"the LDS's first 81 by at most {100 * pre:.1f} %" in line
     assert f"the 3^4 lattice by at most {100 * lat:.1f} %" in line
     assert f"mean MFR {np.mean(lds['mfr'][:81]):.4f}, 0.4500, {np.mean(lds['mfr']):.4f}" in line
+    assert f"would scatter by {np.std(lds['mfr'], ddof=1) / 9:.4f} and {np.std(lds['pd'], ddof=1) / 9:.4f}" in line
     # the 4^4 lattice has not run: no line for it
     assert "N = 256" not in "".join(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- Matched"))
