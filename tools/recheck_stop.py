@@ -42,7 +42,7 @@ def recheck(table: pd.DataFrame, cfg: dict, last: dict, previous: dict, calibrat
     """The last step decided again with the cases' noise SDs calibrated by `calibration`."""
     n = int(last["n"])
     if len(table) != n:
-        raise ValueError(f"the last step is after {n} cases; the cases table has {len(table)} usable rows")
+        raise ValueError(f"the last step is after {n} cases; the cases table has {len(table)} rows")
     return step(calibrated_noise(table, calibration), n, cfg["converge"], previous,
                 fit=make_gp_fit(cfg["ranges"], n_restarts=1), ranges=cfg["ranges"], maps_cfg=cfg.get("maps", {}),
                 lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["convergence"].get("tolerance", 0.005),
