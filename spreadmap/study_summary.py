@@ -197,20 +197,25 @@ def _surrogate(study: Path) -> list[str]:
 
 def _intervals_by_band(study: Path, metrics: pd.DataFrame) -> list[str]:
     """The maps' model's out-of-fold intervals by band of h/d (spreadmap.surrogate.validation.by_band),
-    for MFR and PD, from the parity table and the h/d of the loop's cases."""
-    parity, cases = _read_csv(study / "surrogate" / "surrogate_parity.csv"), _read_csv(study / "cases_converge.csv")
+    for MFR and PD, from the parity table and the h/d of the published cases tables."""
+    parity = _read_csv(study / "surrogate" / "surrogate_parity.csv")
+    tables = [t for t in (_read_csv(p) for p in sorted(study.glob("cases_*.csv"))) if t is not None and len(t)]
     map_model = metrics.loc[metrics["map_model"].astype(bool), "model"] if "map_model" in metrics else pd.Series([], dtype=object)
-    if parity is None or cases is None or map_model.empty:
+    if parity is None or not tables or map_model.empty:
         return []
+    cases = pd.concat([t[["case_id", "h_um", "d_um"]] for t in tables if {"case_id", "h_um", "d_um"} <= set(t.columns)])
     h_over_d = (cases["h_um"] / cases["d_um"]).groupby(cases["case_id"]).first()
     lines = []
     for target in ("mfr", "pd"):
         oof = parity[(parity["model"] == map_model.iloc[0]) & (parity["target"] == target)]
-        if oof.empty:
+        known = oof["case_id"].isin(h_over_d.index)
+        if not known.any():
             continue
-        bands = by_band(oof, h_over_d)
+        left_out = oof.loc[~known, "case_id"].nunique()
+        bands = by_band(oof[known], h_over_d)
         lines.append(f"- {target} ({map_model.iloc[0]}), its intervals by h/d (out of fold; z = error / the interval's SD, "
-                     f"mean z^2 1 where they are right, below 1 where wide): " + "; ".join(
+                     f"mean z^2 1 where they are right, below 1 where wide"
+                     + (f"; {left_out} cases in no published table left out" if left_out else "") + "): " + "; ".join(
                          f"{r['h_over_d']}: {r['cases']} cases, error {r['rmse']:.4f} against the cases' noise "
                          f"{r['case_sd']:.4f}, interval SD {r['interval_sd']:.4f} (the model's {r['model_sd']:.4f}), "
                          f"mean z^2 {r['mean_z2']:.2f}, {100 * r['inside']:.0f} % inside" for r in bands.to_dict("records")))

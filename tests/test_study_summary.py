@@ -135,7 +135,11 @@ def test_the_summary_states_the_map_models_intervals_by_h_over_d(tmp_path):
     line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp), its intervals"))
     assert ("1.5-2: 1 cases, error 0.0100 against the cases' noise 0.0150, interval SD 0.0200 (the model's 0.0100), "
             "mean z^2 0.25, 100 % inside") in line
-    assert ">= 3: 1 cases, error 0.0100" in line and "0-1.5" not in line
+    assert ">= 3: 1 cases, error 0.0100" in line and "0-1.5" not in line and "left out" not in line
+    # a case of the training table in no published cases table (the main job trains on more): left out, said so
+    pd.DataFrame(rows + [{**rows[0], "case_id": "z"}]).to_csv(tmp_path / "surrogate" / "surrogate_parity.csv", index=False)
+    line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp), its intervals"))
+    assert "; 1 cases in no published table left out): " in line and "1.5-2: 1 cases" in line
 
 
 def test_matched_size_compares_the_lattice_and_the_lds_prefix_with_the_largest_lds_partition(tmp_path):
