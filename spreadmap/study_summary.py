@@ -113,6 +113,7 @@ def _study_rule_so_far(study: Path) -> list[str]:
     lines = []
     lds = _read_csv(study / "cases_lds.csv")
     partitions = ((cfg.get("sweeps") or {}).get("lds") or {}).get("partitions", [])
+    complete = []  # the LDS partitions whose every case has run
     if lds is not None and len(lds) and "index" in lds:
         indices = set(lds["index"].astype(int))
         complete = [n for n in sorted(partitions) if all(i in indices for i in range(n))]
@@ -134,38 +135,35 @@ def _study_rule_so_far(study: Path) -> list[str]:
             hit = first_converged(table)
             lines.append(f"- The study's rule, lattices so far: largest change at N = {steps}; "
                          + (f"**holds at N = {hit}**." if hit else f"**not within {max(k ** len(NAMES) for k in done)} cases**."))
-    lines += _matched_sizes(lds, lattice, ks, partitions, floors)
+    lines += _matched_sizes(lds, lattice, ks, complete, floors)
     return lines or [f"- The study's rule on the sweeps: {NOT_YET} (fewer than two complete partitions)."]
 
 
-def _matched_sizes(lds, lattice, ks, partitions, floors) -> list[str]:
+def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
     """The sampling comparison at matched size, as far as the sweeps have run: each complete
     lattice k^4 and the LDS's first k^4 cases, both against the largest complete LDS partition
-    (the largest sample), by the study's change measure (spreadmap.convergence.study_rule.difference_from)."""
+    (`complete`: the LDS partitions whose every case has run; the largest sample), by the study's
+    change measure (spreadmap.convergence.study_rule.difference_from)."""
     from spreadmap.convergence.study_rule import difference_from
 
-    if lds is None or lattice is None or not len(lds) or not len(lattice) or "k" not in lattice or "index" not in lds:
+    if not complete or lattice is None or not len(lattice) or "k" not in lattice:
         return []
-    indices = set(lds["index"].astype(int))
-    complete = [n for n in sorted(partitions) if all(i in indices for i in range(n))]
     lines = []
     for k in ks:
         n = k ** len(NAMES)
-        if (lattice["k"] == k).sum() != n or not complete or max(complete) <= n:
+        if (lattice["k"] == k).sum() != n or max(complete) <= n:
             continue
         ref = lds[lds["index"] < max(complete)]
-        of_lds = difference_from(ref, lds[lds["index"] < n], floors=floors)
-        of_lattice = difference_from(ref, lattice[lattice["k"] == k], floors=floors)
+        of_lds = difference_from(ref, lds[lds["index"] < n], floors=floors).set_index(["target", "statistic"], drop=False)
+        of_lattice = difference_from(ref, lattice[lattice["k"] == k], floors=floors).set_index(["target", "statistic"], drop=False)
         parts = []
         for name, diff in ((f"LDS's first {n}", of_lds), (f"{k}^{len(NAMES)} lattice", of_lattice)):
             worst = diff.loc[diff["difference"].idxmax()]
             parts.append(f"the {name} by at most {100 * worst['difference']:.1f} % ({worst['target']} {worst['statistic']}: "
                          f"{worst['other']:.4g} against {worst['reference']:.4g})")
-        means = {t: (of_lds.set_index(["target", "statistic"]).loc[(t, "mean"), "other"],
-                     of_lattice.set_index(["target", "statistic"]).loc[(t, "mean"), "other"],
-                     of_lds.set_index(["target", "statistic"]).loc[(t, "mean"), "reference"]) for t in ("mfr", "pd")}
-        sd = of_lds.set_index(["target", "statistic"])["reference"]
-        scatter = {t: sd.loc[(t, "std")] / np.sqrt(n) for t in ("mfr", "pd")}
+        means = {t: (of_lds.loc[(t, "mean"), "other"], of_lattice.loc[(t, "mean"), "other"],
+                     of_lds.loc[(t, "mean"), "reference"]) for t in ("mfr", "pd")}
+        scatter = {t: of_lds.loc[(t, "std"), "reference"] / np.sqrt(n) for t in ("mfr", "pd")}
         lines.append(f"- Matched size N = {n}, against LDS {max(complete)} (the largest sample): the five statistics of "
                      + " and of ".join(parts) + "; mean MFR " + ", ".join(f"{v:.4f}" for v in means["mfr"])
                      + " and PD " + ", ".join(f"{v:.4f}" for v in means["pd"]) + f" (LDS {n}, lattice, LDS {max(complete)}; "
