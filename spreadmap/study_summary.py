@@ -83,25 +83,27 @@ def _convergence(study: Path) -> list[str]:
             lines += ["", "```", last["summary"], "```", ""]
         else:
             lines.append(f"- The main job's loop: {NOT_YET}.")
+    lines += _study_rule(study)
     rule = study / "convergence" / "summary.json"
-    if rule.exists():
+    if rule.exists():  # the workflow's own verdicts, once both sweeps have run: what they add
         r = json.loads(rule.read_text())
-        for name, v in r["sweeps"].items():
-            lines.append(f"- The study's rule (five statistics within {100 * r['tolerance']:g} %), {name}: "
-                         f"{v['status']} ({v['cases_run']} cases run).")
         for key, ratio in r.items():
             if key.startswith("ratio_") and isinstance(ratio, dict):
-                lines.append(f"- {ratio.get('text', '')}")
-    else:
-        lines += _study_rule_so_far(study)
+                lines.append(f"- The workflow's convergence summary: {ratio.get('text', '')}")
+        stable = r.get("lds_case_by_case") or {}
+        if stable.get("n_last"):
+            lines.append(f"- The study's rule case by case on the LDS (each case against the one before): "
+                         + (f"holds from N = {stable['stable_from']} on" if stable.get("stable_from")
+                            else f"does not hold for good within {stable['n_last']} cases")
+                         + (f" (first holds at N = {stable['first_holds']})." if stable.get("first_holds") else "."))
     return lines
 
 
-def _study_rule_so_far(study: Path) -> list[str]:
-    """The study's rule on the sweeps' partitions that have finished (before the workflow's own
-    convergence summary exists): the LDS partitions of config.yaml whose every case has run, the
-    lattices whose every case has run; the largest relative change of the five statistics of MFR
-    and PD from the partition before."""
+def _study_rule(study: Path) -> list[str]:
+    """The study's rule on the sweeps' partitions that have finished, from the published cases:
+    the LDS partitions of config.yaml whose every case has run, the lattices whose every case has
+    run; the largest relative change of the five statistics of MFR and PD from the partition
+    before."""
     import yaml
 
     from spreadmap.convergence.study_rule import convergence_table, first_converged
@@ -151,22 +153,27 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
     lines = []
     for k in ks:
         n = k ** len(NAMES)
-        if (lattice["k"] == k).sum() != n or max(complete) <= n:
+        if (lattice["k"] == k).sum() != n or max(complete) < n:
             continue
         ref = lds[lds["index"] < max(complete)]
         of_lds = difference_from(ref, lds[lds["index"] < n], floors=floors).set_index(["target", "statistic"], drop=False)
         of_lattice = difference_from(ref, lattice[lattice["k"] == k], floors=floors).set_index(["target", "statistic"], drop=False)
         parts = []
-        for name, diff in ((f"LDS's first {n}", of_lds), (f"{k}^{len(NAMES)} lattice", of_lattice)):
+        # at the largest LDS partition's own size the LDS prefix is the reference itself: the lattice alone
+        samples = [(f"{k}^{len(NAMES)} lattice", of_lattice)]
+        if n < max(complete):
+            samples.insert(0, (f"LDS's first {n}", of_lds))
+        for name, diff in samples:
             worst = diff.loc[diff["difference"].idxmax()]
             parts.append(f"the {name} by at most {100 * worst['difference']:.1f} % ({worst['target']} {worst['statistic']}: "
                          f"{worst['other']:.4g} against {worst['reference']:.4g})")
-        means = {t: (of_lds.loc[(t, "mean"), "other"], of_lattice.loc[(t, "mean"), "other"],
-                     of_lds.loc[(t, "mean"), "reference"]) for t in ("mfr", "pd")}
+        names = ([f"LDS {n}"] if n < max(complete) else []) + ["lattice", f"LDS {max(complete)}"]
+        means = {t: ([of_lds.loc[(t, "mean"), "other"]] if n < max(complete) else [])
+                 + [of_lattice.loc[(t, "mean"), "other"], of_lds.loc[(t, "mean"), "reference"]] for t in ("mfr", "pd")}
         scatter = {t: of_lds.loc[(t, "std"), "reference"] / np.sqrt(n) for t in ("mfr", "pd")}
         lines.append(f"- Matched size N = {n}, against LDS {max(complete)} (the largest sample): the five statistics of "
                      + " and of ".join(parts) + "; mean MFR " + ", ".join(f"{v:.4f}" for v in means["mfr"])
-                     + " and PD " + ", ".join(f"{v:.4f}" for v in means["pd"]) + f" (LDS {n}, lattice, LDS {max(complete)}; "
+                     + " and PD " + ", ".join(f"{v:.4f}" for v in means["pd"]) + f" ({', '.join(names)}; "
                      f"the mean of {n} random cases would scatter by {scatter['mfr']:.4f} and {scatter['pd']:.4f}, "
                      f"the SD of LDS {max(complete)} over sqrt({n}))")
     return lines

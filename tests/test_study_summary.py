@@ -175,3 +175,39 @@ def test_matched_size_compares_the_lattice_and_the_lds_prefix_with_the_largest_l
     assert f"would scatter by {np.std(lds['mfr'], ddof=1) / 9:.4f} and {np.std(lds['pd'], ddof=1) / 9:.4f}" in line
     # the 4^4 lattice has not run: no line for it
     assert "N = 256" not in "".join(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- Matched"))
+    # once it has: at LDS 256's own size the lattice alone against it, and the study's rule from lattice to lattice
+    lattice4 = pd.DataFrame({"k": 4, "sweep": "lattice", "status": "ok", "flagged": False,
+                             "mfr": np.tile([0.38, 0.43, 0.47, 0.52], 64), "pd": np.tile([0.32, 0.38, 0.42, 0.48], 64)})
+    both = pd.concat([lattice, lattice4], ignore_index=True)
+    both.assign(case_id=[f"lattice{i}" for i in range(len(both))], regime="normal", h_um=60.0, d_um=30.0,
+                v_mm_s=10.0).to_csv(tmp_path / "cases_lattice.csv", index=False)
+    text = summary_markdown(tmp_path, RANGES).splitlines()
+    line = next(x for x in text if x.startswith("- Matched size N = 256"))
+    lat4 = max(worst(lattice4[t].to_numpy(), lds[t].to_numpy()) for t in ("mfr", "pd"))
+    assert f"the 4^4 lattice by at most {100 * lat4:.1f} %" in line and "LDS's first" not in line
+    assert f"mean MFR {np.mean(lattice4['mfr']):.4f}, {np.mean(lds['mfr']):.4f} and PD" in line
+    assert "(lattice, LDS 256; " in line
+    rule = next(x for x in text if x.startswith("- The study's rule, lattices so far"))
+    step = max(worst(lattice4[t].to_numpy(), lattice[t].to_numpy()) for t in ("mfr", "pd"))
+    assert f"largest change at N = 256: {100 * step:.1f} %; **not within 256 cases**." in rule
+
+
+def test_the_workflows_convergence_summary_adds_to_the_rule_from_the_cases(tmp_path):
+    """With results/convergence/summary.json published, the lines computed from the cases stay (they
+    carry the changes by N) and the workflow's ratio and case-by-case verdict are added."""
+    rng = np.random.default_rng(5)
+    pd.DataFrame({"index": np.arange(64), "sweep": "lds", "status": "ok", "flagged": False, "case_id": range(64),
+                  "regime": "normal", "h_um": 60.0, "d_um": 30.0, "v_mm_s": 10.0,
+                  "mfr": rng.normal(0.45, 0.05, 64), "pd": rng.normal(0.40, 0.06, 64)}).to_csv(
+        tmp_path / "cases_lds.csv", index=False)
+    (tmp_path / "config.yaml").write_text(json.dumps({"sweeps": {"lds": {"partitions": [32, 64]}}}))
+    (tmp_path / "convergence").mkdir()
+    (tmp_path / "convergence" / "summary.json").write_text(json.dumps({
+        "tolerance": 0.005, "sweeps": {"lds": {"converged_n": None, "cases_run": 64, "status": "not converged"}},
+        "ratio_lattice_to_lds": {"value": None, "kind": "undefined", "text": "lds: not converged; no ratio"},
+        "lds_case_by_case": {"first_holds": 40, "stable_from": None, "n_last": 64}}))
+    text = summary_markdown(tmp_path, RANGES)
+    assert "LDS so far: largest change at N = 64: " in text and "**not within 64 cases**." in text
+    assert "- The workflow's convergence summary: lds: not converged; no ratio" in text
+    assert ("- The study's rule case by case on the LDS (each case against the one before): does not hold for good "
+            "within 64 cases (first holds at N = 40).") in text
