@@ -22,6 +22,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from .convergence.stepper import step_number
 from .files import write_text_atomically
 
 # Columns of a results table that are the table's labels of a case, not the case's metrics.
@@ -100,10 +101,6 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
                 os.utime(folder / name, (mtime, mtime))
             counts["restored"] += 1
     return counts
-
-
-def step_number(path: Path | str) -> int:
-    return int(Path(path).stem.rsplit("_", 1)[1])
 
 
 def restore_steps(steps: list[Path | str], workdir: Path | str, mtime: float) -> list[str]:

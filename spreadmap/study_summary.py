@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
+from spreadmap.convergence.stepper import step_number
 from spreadmap.design import NAMES, bounds
 from spreadmap.surrogate.validation import by_band
 
@@ -76,7 +77,7 @@ def _convergence(study: Path) -> list[str]:
                    else f"the map criteria **did not hold within {s['n']} cases** (stopped: {s['reason']})")
         lines.append(f"- The main job's loop: {verdict}; {s['usable']} usable, {s['cpu_hours']:.2f} CPU hours.")
     else:
-        steps = sorted((study / "converge" / "steps").glob("step_*.json"), key=lambda s: int(s.stem.split("_")[1]))
+        steps = sorted((study / "converge" / "steps").glob("step_*.json"), key=step_number)
         if steps:
             last = json.loads(steps[-1].read_text())
             lines.append(f"- The main job's loop, still running: {len(steps)} steps so far; the last one says")

@@ -27,6 +27,7 @@ Everything the step needs is its arguments, so it is tested without Snakemake or
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -184,3 +185,9 @@ def describe(record: Mapping[str, Any]) -> str:
     if record["next_n"]:
         lines.append(f"  next: {len(record['next_batch'])} cases ({record['settings']['sampling']}), up to {record['next_n']}")
     return "\n".join(lines)
+
+
+def step_number(path: Path | str) -> int:
+    """N of a step record's file name, results/converge/step_{N}.json (to order records by N,
+    not as text: step_96 before step_112)."""
+    return int(Path(path).stem.rsplit("_", 1)[1])
