@@ -334,6 +334,21 @@ def test_plots_write_png_pdf_csv(tmp_path):
         2 * TOL * conv["lds"]["mfr_mean"].iloc[-1])
 
 
+def test_statistic_panels_are_scaled_to_the_partitions_not_the_first_few_cases():
+    """A case-by-case curve's first cases swing widely; the y range covers the partitions, the bands
+    and the case-by-case values from the smallest partition on, and nothing before it."""
+    from spreadmap.convergence import plots as cp
+    panel = pd.DataFrame({"n": [2, 3, 16, 50, 16, 81], "value": [5.0, -4.0, 0.44, 0.45, 0.43, 0.46],
+                          "band_low": 0.447, "band_high": 0.453})
+    low, high = cp.statistic_limits(panel, n_from=16, pad=0.1)
+    assert (low, high) == pytest.approx((0.43 - 0.003, 0.46 + 0.003))
+    assert cp._scaled_from({"run": pd.DataFrame({"x": [1.0]}, index=[2]),
+                            "lattice": pd.DataFrame({"partition": [81, 256]}),
+                            "lds": pd.DataFrame({"partition": [16, 32]})}) == 16
+    assert cp._scaled_from({"run": pd.DataFrame({"x": [1.0]}, index=[2])}) == 1
+    assert cp.statistic_limits(panel.assign(value=np.nan, band_low=np.nan, band_high=np.nan), 16) is None
+
+
 # ---------------------------------------------------------------------------------------------
 # the map model interface (a GP) and the map-level criteria, on functions with known truth
 # ---------------------------------------------------------------------------------------------

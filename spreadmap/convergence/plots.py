@@ -124,12 +124,15 @@ def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
     or a ``running_statistics`` frame (index ``n``).  The band is final value
     +- tolerance * max(|final|, floor): the set of values within the criterion's reach of where
     the sweep ended (the floor rule of ``convergence`` applies to skewness and kurtosis).
+    With a partition sweep among them, the axes start at its smallest partition: a case-by-case
+    curve's first few cases swing over a range that would flatten the rest (the CSV keeps them).
     """
     long_df = pd.concat([_stats_long(k, v, targets, tolerance, floors) for k, v in sweeps.items()],
                         ignore_index=True)
     fig = new_figure(4.5 * len(targets), 2.4 * len(cv.STATISTICS))
     axes = fig.subplots(len(cv.STATISTICS), len(targets), squeeze=False, sharex=True)
     colors = {name: f"C{i}" for i, name in enumerate(sweeps)}
+    n_from = _scaled_from(sweeps)
     for j, t in enumerate(targets):
         for i, s in enumerate(cv.STATISTICS):
             ax = axes[i, j]
@@ -143,6 +146,10 @@ def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
                 ax.plot(sub["n"], sub["value"], color=c, marker=marker, ms=3, lw=1, label=name)
                 ax.axhspan(sub["band_low"].iloc[0], sub["band_high"].iloc[0], color=c, alpha=0.15,
                            label=f"{name} final +- {tolerance:.2%} band")
+            panel = long_df[(long_df["target"] == t) & (long_df["statistic"] == s)]
+            limits = statistic_limits(panel, n_from)
+            if limits is not None:
+                ax.set_ylim(*limits)
             ax.set_xscale("log")
             ax.xaxis.set_minor_formatter(NullFormatter())
             ax.set_ylabel(f"{t.upper()} {STAT_LABELS[s]}")
@@ -150,8 +157,37 @@ def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
                 ax.set_xlabel(N_LABEL)
             if i == 0:
                 ax.set_title(f"{t.upper()} statistics against N")
-                ax.legend(fontsize="x-small")
+    if n_from > 1:  # a case-by-case curve's first few cases are left off (they are in the CSV)
+        axes[0, 0].set_xlim(n_from / 1.15, long_df["n"].max() * 1.15)
+        ticks = sorted({int(n) for v in sweeps.values() if _is_partition_frame(v) for n in v["partition"]})
+        axes[0, 0].set_xticks(ticks, [str(n) for n in ticks])  # shared x: every panel's ticks
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 3), fontsize="small")
     return save_figure(fig, path_stem, long_df)
+
+
+def _is_partition_frame(df: pd.DataFrame) -> bool:
+    return "partition" in df.columns
+
+
+def _scaled_from(sweeps: Mapping[str, pd.DataFrame]) -> int:
+    """The N from which the y axes are scaled: the smallest partition of any partition sweep (a
+    case-by-case curve's first few cases swing over a range that would flatten everything else)."""
+    sizes = [int(v["partition"].min()) for v in sweeps.values() if _is_partition_frame(v) and len(v)]
+    return min(sizes) if sizes else 1
+
+
+def statistic_limits(panel: pd.DataFrame, n_from: int, pad: float = 0.08) -> tuple[float, float] | None:
+    """y limits of one statistic's panel: every value at N >= n_from and every sweep's band, padded
+    by ``pad`` of their span (None when nothing finite is left)."""
+    values = np.concatenate([panel.loc[panel["n"] >= n_from, "value"].to_numpy(dtype=float),
+                             panel["band_low"].to_numpy(dtype=float), panel["band_high"].to_numpy(dtype=float)])
+    values = values[np.isfinite(values)]
+    if not values.size:
+        return None
+    low, high = values.min(), values.max()
+    span = high - low if high > low else max(abs(high), 1e-12)
+    return low - pad * span, high + pad * span
 
 
 # ----------------------------------------------------------------------------------------------
