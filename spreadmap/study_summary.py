@@ -161,15 +161,14 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
         of_lattice = difference_from(ref, lattice[lattice["k"] == k], floors=floors).set_index(["target", "statistic"], drop=False)
         parts = []
         # at the largest LDS partition's own size the LDS prefix is the reference itself: the lattice alone
-        samples = [(f"{k}^{len(NAMES)} lattice", of_lattice)]
-        if n < max(complete):
-            samples.insert(0, (f"LDS's first {n}", of_lds))
+        prefix = n < max(complete)
+        samples = ([(f"LDS's first {n}", of_lds)] if prefix else []) + [(f"{k}^{len(NAMES)} lattice", of_lattice)]
         for name, diff in samples:
             worst = diff.loc[diff["difference"].idxmax()]
             parts.append(f"the {name} by at most {100 * worst['difference']:.1f} % ({worst['target']} {worst['statistic']}: "
                          f"{worst['other']:.4g} against {worst['reference']:.4g})")
-        names = ([f"LDS {n}"] if n < max(complete) else []) + ["lattice", f"LDS {max(complete)}"]
-        means = {t: ([of_lds.loc[(t, "mean"), "other"]] if n < max(complete) else [])
+        names = ([f"LDS {n}"] if prefix else []) + ["lattice", f"LDS {max(complete)}"]
+        means = {t: ([of_lds.loc[(t, "mean"), "other"]] if prefix else [])
                  + [of_lattice.loc[(t, "mean"), "other"], of_lds.loc[(t, "mean"), "reference"]] for t in ("mfr", "pd")}
         scatter = {t: of_lds.loc[(t, "std"), "reference"] / np.sqrt(n) for t in ("mfr", "pd")}
         lines.append(f"- Matched size N = {n}, against LDS {max(complete)} (the largest sample): the five statistics of "

@@ -26,9 +26,8 @@ import pandas as pd  # noqa: E402
 
 from spreadmap import config as spreadmap_config  # noqa: E402
 from spreadmap.convergence.model import make_gp_fit  # noqa: E402
-from spreadmap.convergence.stepper import step  # noqa: E402
+from spreadmap.convergence.stepper import step, step_number  # noqa: E402
 from spreadmap.metrics.noise import calibrated_noise  # noqa: E402
-from spreadmap.convergence.stepper import step_number  # noqa: E402
 
 
 def last_two_steps(steps_dir: Path) -> tuple[dict, dict]:

@@ -159,22 +159,23 @@ def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
                 ax.set_title(f"{t.upper()} statistics against N")
     if n_from > 1:  # a case-by-case curve's first few cases are left off (they are in the CSV)
         axes[0, 0].set_xlim(n_from / 1.15, long_df["n"].max() * 1.15)
-        ticks = sorted({int(n) for v in sweeps.values() if _is_partition_frame(v) for n in v["partition"]})
+        ticks = _partition_sizes(sweeps)
         axes[0, 0].set_xticks(ticks, [str(n) for n in ticks])  # shared x: every panel's ticks
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 3), fontsize="small")
     return save_figure(fig, path_stem, long_df)
 
 
-def _is_partition_frame(df: pd.DataFrame) -> bool:
-    return "partition" in df.columns
+def _partition_sizes(sweeps: Mapping[str, pd.DataFrame]) -> list[int]:
+    """Every partition size (N) of the partition sweeps among ``sweeps``, sorted."""
+    return sorted({int(n) for v in sweeps.values() if "partition" in v.columns for n in v["partition"]})
 
 
 def _scaled_from(sweeps: Mapping[str, pd.DataFrame]) -> int:
     """The N from which the y axes are scaled: the smallest partition of any partition sweep (a
     case-by-case curve's first few cases swing over a range that would flatten everything else)."""
-    sizes = [int(v["partition"].min()) for v in sweeps.values() if _is_partition_frame(v) and len(v)]
-    return min(sizes) if sizes else 1
+    sizes = _partition_sizes(sweeps)
+    return sizes[0] if sizes else 1
 
 
 def statistic_limits(panel: pd.DataFrame, n_from: int, pad: float = 0.08) -> tuple[float, float] | None:
