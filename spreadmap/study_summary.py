@@ -88,6 +88,9 @@ def _convergence(study: Path) -> list[str]:
     rule = study / "convergence" / "summary.json"
     if rule.exists():  # the workflow's own verdicts, once both sweeps have run: what they add
         r = json.loads(rule.read_text())
+        for name, v in r["sweeps"].items():
+            lines.append(f"- The study's rule (five statistics within {100 * r['tolerance']:g} %), {name}: "
+                         f"{v['status']} ({v['cases_run']} cases run).")
         for key, ratio in r.items():
             if key.startswith("ratio_") and isinstance(ratio, dict):
                 lines.append(f"- The workflow's convergence summary: {ratio.get('text', '')}")

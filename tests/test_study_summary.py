@@ -209,5 +209,6 @@ def test_the_workflows_convergence_summary_adds_to_the_rule_from_the_cases(tmp_p
     text = summary_markdown(tmp_path, RANGES)
     assert "LDS so far: largest change at N = 64: " in text and "**not within 64 cases**." in text
     assert "- The workflow's convergence summary: lds: not converged; no ratio" in text
+    assert "- The study's rule (five statistics within 0.5 %), lds: not converged (64 cases run)." in text
     assert ("- The study's rule case by case on the LDS (each case against the one before): does not hold for good "
             "within 64 cases (first holds at N = 40).") in text
