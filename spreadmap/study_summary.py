@@ -108,12 +108,9 @@ def _study_rule(study: Path) -> list[str]:
     the LDS partitions of config.yaml whose every case has run, the lattices whose every case has
     run; the largest relative change of the five statistics of MFR and PD from the partition
     before."""
-    import yaml
-
     from spreadmap.convergence.study_rule import convergence_table, first_converged
 
-    cfg_path = study / "config.yaml"
-    cfg = yaml.safe_load(cfg_path.read_text()) if cfg_path.exists() else {}
+    cfg = _read_yaml(study / "config.yaml")
     conv = cfg.get("convergence") or {}
     tol, floors = conv.get("tolerance", 0.005), conv.get("floors")
     lines = []
@@ -128,7 +125,7 @@ def _study_rule(study: Path) -> list[str]:
             steps = ", ".join(f"{int(r['partition'])}: {100 * r['max_change']:.1f} %" for r in table.to_dict("records")[1:])
             hit = first_converged(table)
             lines.append(f"- The study's rule (five statistics of MFR and PD within {100 * tol:g} % of the partition "
-                         f"before), LDS so far: largest change at N = {steps}; "
+                         f"before), on the LDS: largest change at N = {steps}; "
                          + (f"**holds at N = {hit}**." if hit else f"**not within {max(complete)} cases**."))
     lattice = _read_csv(study / "cases_lattice.csv")
     ks = sorted(set(((cfg.get("sweeps") or {}).get("lattice") or {}).get("k", [])))
@@ -139,7 +136,7 @@ def _study_rule(study: Path) -> list[str]:
                                       partition_col="k")
             steps = ", ".join(f"{int(r['partition'])}: {100 * r['max_change']:.1f} %" for r in table.to_dict("records")[1:])
             hit = first_converged(table)
-            lines.append(f"- The study's rule, lattices so far: largest change at N = {steps}; "
+            lines.append(f"- The study's rule on the lattices: largest change at N = {steps}; "
                          + (f"**holds at N = {hit}**." if hit else f"**not within {max(k ** len(NAMES) for k in done)} cases**."))
     lines += _matched_sizes(lds, lattice, ks, complete, floors)
     return lines or [f"- The study's rule on the sweeps: {NOT_YET} (fewer than two complete partitions)."]
@@ -297,18 +294,32 @@ def _regimes(study: Path) -> list[str]:
     tables = [t for t in (_read_csv(study / f"cases_{n}.csv") for n in ("lds", "lattice", "converge")) if t is not None]
     if not tables:
         return lines + [NOT_YET]
-    cases = pd.concat(tables).drop_duplicates("case_id")
+    cases = pd.concat(tables, ignore_index=True).drop_duplicates("case_id")
     cases = cases[cases["status"] == "ok"]
     cases = cases.assign(h_over_d=cases["h_um"] / cases["d_um"])
     for regime, group in cases.groupby("regime"):
         lines.append(f"- {regime}: {len(group)} of {len(cases)} cases; h/d {group['h_over_d'].min():.2f}-"
                      f"{group['h_over_d'].max():.2f}, v {group['v_mm_s'].min():.1f}-{group['v_mm_s'].max():.1f} mm/s")
+    if "jamming" not in set(cases["regime"]) and "mfr" in cases and len(cases):
+        # a regime the cases never reached is an answer too: how far the nearest case was from it
+        usable = cases[~cases["flagged"].fillna(False).astype(bool)] if "flagged" in cases else cases
+        low = usable.loc[usable["mfr"].idxmin()]
+        rule = (_read_yaml(study / "config.yaml").get("regime") or {}).get("jam_mfr_max")
+        where = f"h/d {low['h_over_d']:.2f}, v {low['v_mm_s']:.1f} mm/s" + (f", f {low['f']:.2f}" if "f" in cases else "")
+        lines.append(f"- jamming: none of {len(cases)} cases" + (f" (the rule: MFR < {rule:g})" if rule is not None else "")
+                     + f"; the lowest MFR of a usable case {low['mfr']:.3f}, at {where}")
     if "flagged" in cases:
         flagged = cases[cases["flagged"].fillna(False).astype(bool)]
         where = (f": h/d {_span(flagged['h_over_d'], '.2f')}, d {_span(flagged['d_um'], '.0f')} um, "
                  f"v {_span(flagged['v_mm_s'], '.1f')} mm/s{_flag_causes(flagged)}" if len(flagged) else "")
         lines.append(f"- flagged (kept out of training): {len(flagged)} of {len(cases)} cases{where}")
     return lines
+
+
+def _read_yaml(path: Path) -> dict:
+    import yaml
+
+    return (yaml.safe_load(path.read_text()) or {}) if path.exists() else {}
 
 
 def _span(values: pd.Series, fmt: str) -> str:
@@ -322,12 +333,16 @@ def _flag_causes(flagged: pd.DataFrame) -> str:
     follows its last ': ' (e.g. 'the pile ran down'), or the reason with its numbers as '#'."""
     if "flag_reason" not in flagged:
         return ""
-    causes = []
+    causes, texts = [], {}
     for reason in flagged["flag_reason"].fillna(""):
         for part in filter(None, (p.strip() for p in str(reason).split(";"))):
-            causes.append(part.rsplit(": ", 1)[1] if ": " in part else re.sub(r"\d+(\.\d+)?(e[-+]?\d+)?", "#", part))
+            cause = part.rsplit(": ", 1)[1] if ": " in part else re.sub(r"\d+(\.\d+)?(e[-+]?\d+)?", "#", part)
+            causes.append(cause)
+            texts.setdefault(cause, part)
     counts = pd.Series(causes, dtype=object).value_counts()
-    return "; why: " + ", ".join(f"{cause} ({n})" for cause, n in counts.items()) if len(counts) else ""
+    # a cause met once reads better with its own numbers ('peak overlap 0.0516 R > 0.05 R' over '# R > # R')
+    named = {c: (c if n > 1 or ": " in texts[c] else texts[c]) for c, n in counts.items()}
+    return "; why: " + ", ".join(f"{named[c]} ({n})" for c, n in counts.items()) if len(counts) else ""
 
 
 def summary_markdown(study: Path | str, ranges: dict | None = None) -> str:

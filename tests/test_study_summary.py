@@ -115,6 +115,32 @@ def test_flag_causes_are_counted_by_their_cause_with_numbers_hidden():
         "peak overlap 0.13 R > 0.1 R", None]})
     assert _flag_causes(flagged) == "; why: the pile ran down (2), peak overlap # R > # R (2)"
     assert _flag_causes(pd.DataFrame({"flag_reason": [""]})) == ""
+    # a cause met once keeps its numbers
+    once = pd.DataFrame({"flag_reason": ["peak overlap 0.0516 R > 0.05 R", "x fell: the pile ran down"]})
+    assert _flag_causes(once) == "; why: peak overlap 0.0516 R > 0.05 R (1), the pile ran down (1)"
+
+
+def test_the_summary_says_jamming_was_not_reached_and_how_close_the_nearest_case_came(tmp_path):
+    (tmp_path / "config.yaml").write_text(json.dumps({"regime": {"jam_mfr_max": 0.05}}))
+    pd.DataFrame([{"case_id": f"c{i}", "status": "ok", "regime": "normal", "h_um": h, "d_um": 20.0, "v_mm_s": v,
+                   "f": f, "mfr": m, "flagged": False}
+                  for i, (h, v, f, m) in enumerate([(40.0, 12.0, 0.4, 0.31), (80.0, 6.0, 0.2, 0.52), (30.0, 9.0, 0.3, 0.1)])]
+                 ).to_csv(tmp_path / "cases_lds.csv", index=False)
+    cases = pd.read_csv(tmp_path / "cases_lds.csv")
+    cases.loc[2, "flagged"] = True  # a flagged case's MFR is not a measurement to quote
+    cases.to_csv(tmp_path / "cases_lds.csv", index=False)
+    text = summary_markdown(tmp_path, RANGES)
+    assert ("- jamming: none of 3 cases (the rule: MFR < 0.05); the lowest MFR of a usable case 0.310, at h/d 2.00, "
+            "v 12.0 mm/s, f 0.40") in text
+    # where jamming was reached the line counts those cases instead
+    assert "jamming: none" not in summary_markdown(_with_regime(tmp_path, "jamming"), RANGES)
+
+
+def _with_regime(study, regime):
+    cases = pd.read_csv(study / "cases_lds.csv")
+    cases.loc[0, "regime"] = regime
+    cases.to_csv(study / "cases_lds.csv", index=False)
+    return study
 
 
 def test_the_summary_states_the_map_models_intervals_by_h_over_d(tmp_path):
@@ -187,7 +213,7 @@ def test_matched_size_compares_the_lattice_and_the_lds_prefix_with_the_largest_l
     assert f"the 4^4 lattice by at most {100 * lat4:.1f} %" in line and "LDS's first" not in line
     assert f"mean MFR {np.mean(lattice4['mfr']):.4f}, {np.mean(lds['mfr']):.4f} and PD" in line
     assert "(lattice, LDS 256; " in line
-    rule = next(x for x in text if x.startswith("- The study's rule, lattices so far"))
+    rule = next(x for x in text if x.startswith("- The study's rule on the lattices"))
     step = max(worst(lattice4[t].to_numpy(), lattice[t].to_numpy()) for t in ("mfr", "pd"))
     assert f"largest change at N = 256: {100 * step:.1f} %; **not within 256 cases**." in rule
 
@@ -207,7 +233,7 @@ def test_the_workflows_convergence_summary_adds_to_the_rule_from_the_cases(tmp_p
         "ratio_lattice_to_lds": {"value": None, "kind": "undefined", "text": "lds: not converged; no ratio"},
         "lds_case_by_case": {"first_holds": 40, "stable_from": None, "n_last": 64}}))
     text = summary_markdown(tmp_path, RANGES)
-    assert "LDS so far: largest change at N = 64: " in text and "**not within 64 cases**." in text
+    assert "on the LDS: largest change at N = 64: " in text and "**not within 64 cases**." in text
     assert "- The workflow's convergence summary: lds: not converged; no ratio" in text
     assert "- The study's rule (five statistics within 0.5 %), lds: not converged (64 cases run)." in text
     assert ("- The study's rule case by case on the LDS (each case against the one before): does not hold for good "
