@@ -185,3 +185,52 @@ def test_published_loop_cases_are_its_steps_cases(published):
     stepped = table.iloc[:last["n"]]
     assert stepped["cpu_time"].sum() / 3600 == pytest.approx(last["cpu_hours"], rel=1e-6)
     assert set(table["case_id"].iloc[last["n"]:]) <= {cid for cid, _ in loop_cases(cfg, steps)[last["n"]:]}
+
+
+def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(published):
+    """convergence/partitions.csv (the workflow's study rule) against the five statistics computed
+    here with numpy and scipy from the published cases: the LDS's first N usable cases in plan
+    order for each partition, each lattice by k; and the verdicts of summary.json follow from
+    the changes (none below the tolerance, so neither sweep converged)."""
+    from scipy import stats
+
+    cfg, _ = published
+    parts = pd.read_csv(DOCS / "convergence" / "partitions.csv")
+    summary = json.loads((DOCS / "convergence" / "summary.json").read_text())
+    tables = {"lds": pd.read_csv(DOCS / "cases_lds.csv"), "lattice": pd.read_csv(DOCS / "cases_lattice.csv")}
+    for row in parts.to_dict("records"):
+        table = tables[row["sweep"]]
+        if row["sweep"] == "lds":
+            sample = table[table["index"] < row["partition"]]
+        else:
+            sample = table[table["k"] ** 4 == row["partition"]]  # a lattice's partition is its size k^4
+        sample = sample[(sample["status"] == "ok") & ~sample["flagged"].fillna(False).astype(bool)]
+        assert len(sample) == row["n_usable"], row
+        for target in ("mfr", "pd"):
+            x = sample[target].to_numpy(float)
+            expected = {"mean": x.mean(), "std": x.std(ddof=1), "median": np.median(x),
+                        "kurtosis": stats.kurtosis(x, fisher=True, bias=True), "skewness": stats.skew(x, bias=True)}
+            for name, value in expected.items():
+                assert row[f"{target}_{name}"] == pytest.approx(value, rel=1e-9, abs=1e-12), (row["sweep"], target, name)
+    tol = cfg["convergence"]["tolerance"]
+    for sweep in ("lds", "lattice"):
+        changes = parts.loc[parts["sweep"] == sweep, "max_change"].dropna()
+        assert (changes > tol).all() and summary["sweeps"][sweep]["converged_n"] is None, sweep
+    assert list(parts.loc[parts["sweep"] == "lds", "partition"]) == sorted(cfg["sweeps"]["lds"]["partitions"])
+    assert list(parts.loc[parts["sweep"] == "lattice", "partition"]) == sorted(k ** 4 for k in cfg["sweeps"]["lattice"]["k"])
+
+
+def test_published_summary_recomputes_from_the_published_files(published, tmp_path):
+    """summary.md and the trend tables are what spreadmap.study_summary makes of docs/study's
+    committed cases, steps, surrogate and maps today (in a copy: the summary writes trend_*.csv)."""
+    import shutil
+
+    from spreadmap.study_summary import summary_markdown
+
+    cfg, _ = published
+    copy_ = tmp_path / "study"
+    shutil.copytree(DOCS, copy_)
+    text = summary_markdown(copy_, cfg.get("ranges"))
+    assert text == (DOCS / "summary.md").read_text()
+    for trend in sorted(DOCS.glob("trend_*.csv")):
+        pd.testing.assert_frame_equal(pd.read_csv(copy_ / trend.name), pd.read_csv(trend), rtol=1e-9)
