@@ -42,7 +42,7 @@ def read_csv(path: str) -> pd.DataFrame:
 def choose(args) -> int:
     cfg = spreadmap_config.load(Path(args.config))
     ran = pd.concat([read_csv(p) for p in args.ran], ignore_index=True)
-    points = heldout.choose_points(args.n, cfg["ranges"], ran, args.min_distance, args.seed)
+    points = heldout.choose_points(args.n, cfg["ranges"], ran, args.min_distance, args.seed, args.name_prefix)
     model = load_model(args.model)
     predictions = predict_logged(model, points, sys.stderr)
     write_csv(heldout.runs_of(points, args.seeds, args.preset), args.points)
@@ -84,6 +84,7 @@ def main(argv=None) -> int:
     c.add_argument("--preset", default="default")
     c.add_argument("--min-distance", type=float, default=0.15, help="unit-cube distance from every run")
     c.add_argument("--seed", type=int, default=2026, help="the Sobol' scrambling seed")
+    c.add_argument("--name-prefix", default="heldout", help="the points' names: <prefix>_01, ...")
     c.add_argument("--config", default=str(ROOT / "config.yaml"))
     c.add_argument("--points", required=True, help="points file to write (README points format)")
     c.add_argument("--predictions", required=True, help="predictions file to write")

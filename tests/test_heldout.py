@@ -24,6 +24,8 @@ def test_chosen_points_are_in_range_far_from_the_runs_and_from_one_another():
     # reproducible from its seed, another seed another set
     assert choose_points(12, RANGES, ran, 0.2, seed=5).equals(pts)
     assert not choose_points(12, RANGES, ran, 0.2, seed=6).equals(pts)
+    # a second check names its points apart from the first's
+    assert list(choose_points(2, RANGES, ran, 0.2, seed=5, prefix="heldout2")["name"]) == ["heldout2_01", "heldout2_02"]
 
 
 def test_too_crowded_a_space_is_refused_with_the_knob_to_turn():

@@ -17,10 +17,11 @@ from ..table import usable
 
 
 def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float = 0.15,
-                  seed: int = 2026) -> pd.DataFrame:
+                  seed: int = 2026, prefix: str = "heldout") -> pd.DataFrame:
     """n points of a scrambled Sobol' sequence in the design space, each at least min_distance
     (Euclidean, unit cube) from every point of `ran` (the cases of every sweep) and from the points
-    already chosen. Raises ValueError when 64 n candidates do not give n such points."""
+    already chosen, named <prefix>_01, ... Raises ValueError when 64 n candidates do not give n
+    such points."""
     if n < 1:
         raise ValueError(f"n must be >= 1, got {n}")
     candidates = qmc.Sobol(d=len(NAMES), scramble=True, seed=seed).random(int(2 ** math.ceil(math.log2(64 * n))))
@@ -36,7 +37,7 @@ def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float =
         raise ValueError(f"only {len(chosen)} of {n} held-out points lie {min_distance} (unit cube) from every case "
                          f"run; lower min_distance")
     out = pd.DataFrame(to_physical(np.asarray(chosen), ranges), columns=list(NAMES))
-    out.insert(0, "name", [f"heldout_{i + 1:02d}" for i in range(n)])
+    out.insert(0, "name", [f"{prefix}_{i + 1:02d}" for i in range(n)])
     return out
 
 
