@@ -21,6 +21,7 @@ from scipy.stats import qmc
 from spreadmap.convergence.stepper import step_number
 from spreadmap.design import NAMES, bounds
 from spreadmap.surrogate.validation import by_band
+from spreadmap.table import usable
 
 NOT_YET = "not yet run"
 
@@ -228,10 +229,28 @@ def _intervals_by_band(study: Path, metrics: pd.DataFrame) -> list[str]:
 
 
 def _heldout(study: Path) -> list[str]:
+    """The held-out check (heldout/: of the loop's surrogate as it stopped) and, where it exists, the
+    second one (heldout2/: of the shipped surrogate, re-fitted with both noise calibration bands),
+    each predicted before its points ran."""
     lines = ["## The held-out check (points no sweep ran, predicted before they ran)"]
-    path = study / "heldout" / "score.json"
-    if not path.exists():
+    first = _heldout_score(study / "heldout")
+    if first is None:
         return lines + [NOT_YET]
+    lines += first
+    if (study / "heldout2").is_dir():
+        second = _heldout_score(study / "heldout2")
+        lines.append("- The second check, of the shipped surrogate (both noise calibration bands; `heldout2/`, its "
+                     "points at least 0.15 of the unit cube from every case before):")
+        lines += ["  " + line for line in (second if second is not None else [f"- {NOT_YET}"])]
+    return lines
+
+
+def _heldout_score(folder: Path) -> list[str] | None:
+    """One held-out check's lines from its score.json and score.csv; None before it is scored."""
+    path = folder / "score.json"
+    if not path.exists():
+        return None
+    lines = []
     for r in json.loads(path.read_text()):
         lines.append(f"- {r['target']}: {r['inside']} of {r['points']} points' seed means inside their "
                      f"{100 * r['level']:g} % prediction intervals (coverage {r['coverage']:.2f}, 95 % CI "
@@ -239,7 +258,7 @@ def _heldout(study: Path) -> list[str]:
                      f"{r['rmse_expected']:.4f} expected from the stated SDs (mean z^2 {r['mean_z2']:.2f}, "
                      f"p = {r['p_sd_right']:.2g} for 'the SDs are too small', "
                      f"{r.get('p_sd_too_wide', float('nan')):.2g} for 'too large')")
-    table = _read_csv(study / "heldout" / "score.csv")
+    table = _read_csv(folder / "score.csv")
     if table is not None and "inside" in table:
         outside = table[~table["inside"].astype(bool)]
         for r in outside.to_dict("records"):
@@ -302,8 +321,8 @@ def _regimes(study: Path) -> list[str]:
                      f"{group['h_over_d'].max():.2f}, v {group['v_mm_s'].min():.1f}-{group['v_mm_s'].max():.1f} mm/s")
     if "jamming" not in set(cases["regime"]) and "mfr" in cases and len(cases):
         # a regime the cases never reached is an answer too: how far the nearest case was from it
-        usable = cases[~cases["flagged"].fillna(False).astype(bool)] if "flagged" in cases else cases
-        low = usable.loc[usable["mfr"].idxmin()]
+        fit = cases[usable(cases)]
+        low = fit.loc[fit["mfr"].idxmin()]
         rule = (_read_yaml(study / "config.yaml").get("regime") or {}).get("jam_mfr_max")
         where = f"h/d {low['h_over_d']:.2f}, v {low['v_mm_s']:.1f} mm/s" + (f", f {low['f']:.2f}" if "f" in cases else "")
         lines.append(f"- jamming: none of {len(cases)} cases" + (f" (the rule: MFR < {rule:g})" if rule is not None else "")

@@ -238,3 +238,38 @@ def test_the_workflows_convergence_summary_adds_to_the_rule_from_the_cases(tmp_p
     assert "- The study's rule (five statistics within 0.5 %), lds: not converged (64 cases run)." in text
     assert ("- The study's rule case by case on the LDS (each case against the one before): does not hold for good "
             "within 64 cases (first holds at N = 40).") in text
+
+
+def test_a_second_heldout_check_is_reported_beside_the_first(tmp_path):
+    """heldout/ and heldout2/ each scored by spreadmap.surrogate.heldout.score on known truth: the
+    summary states both, the second under its own heading, with counts computed here with numpy;
+    a second check chosen but not yet scored says so."""
+    from spreadmap.surrogate.heldout import score
+
+    rng = np.random.default_rng(11)
+
+    def scored(folder, shift):
+        names = [f"p{i:02d}" for i in range(12)]
+        truth = rng.uniform(0.3, 0.5, 12)
+        predictions = pd.DataFrame({"name": names, "mfr": truth + shift, "mfr_model_sd": 0.004, "mfr_run_sd": 0.01})
+        runs = pd.DataFrame({"name": np.repeat(names, 4), "mfr": np.repeat(truth, 4) + rng.normal(0, 0.01, 48)})
+        table, summary = score(predictions, runs, "mfr")
+        folder.mkdir()
+        table.assign(target="mfr").rename(columns={"mfr": "predicted"}).to_csv(folder / "score.csv", index=False)
+        (folder / "score.json").write_text(json.dumps([summary]))
+        means = runs.groupby("name")["mfr"].mean().to_numpy()
+        sd = np.sqrt(0.004 ** 2 + (0.01 ** 2 - 0.004 ** 2) / 4)
+        return int(np.sum(np.abs(means - predictions["mfr"].to_numpy()) <= 1.959964 * sd))
+
+    inside_first = scored(tmp_path / "heldout", 0.0)
+    (tmp_path / "heldout2").mkdir()
+    text = summary_markdown(tmp_path, RANGES)
+    assert f"- mfr: {inside_first} of 12 points' seed means inside" in text
+    second = text.split("- The second check, of the shipped surrogate")[1]
+    assert second.splitlines()[1] == "  - " + NOT_YET
+    (tmp_path / "heldout2").rmdir()
+    inside_second = scored(tmp_path / "heldout2", 0.02)  # predictions 2 SDs of one run off: most points outside
+    assert inside_second < 6
+    second = summary_markdown(tmp_path, RANGES).split("- The second check, of the shipped surrogate")[1]
+    assert f"  - mfr: {inside_second} of 12 points' seed means inside" in second
+    assert second.count("  - outside: ") == 12 - inside_second
