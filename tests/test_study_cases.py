@@ -234,3 +234,36 @@ def test_published_summary_recomputes_from_the_published_files(published, tmp_pa
     assert text == (DOCS / "summary.md").read_text()
     for trend in sorted(DOCS.glob("trend_*.csv")):
         pd.testing.assert_frame_equal(pd.read_csv(copy_ / trend.name), pd.read_csv(trend), rtol=1e-9)
+
+
+@pytest.mark.parametrize("check, cases", [("heldout", "cases_heldout.csv"), ("heldout2", "cases_heldout2.csv")])
+def test_published_heldout_scores_recompute_from_the_cases_and_the_predictions(check, cases):
+    """Each held-out check's score.csv and score.json against the committed runs and the predictions
+    committed before them, recomputed here: seed means of the usable runs matched to the points by
+    design point, the SD of a seed mean sqrt(model^2 + (run^2 - model^2) / n), |z| <= 1.96 inside,
+    the coverage interval from scipy's exact binomial test."""
+    from scipy import stats
+
+    folder = DOCS / check
+    points = pd.read_csv(folder / "points.csv").drop_duplicates("name")
+    predictions = pd.read_csv(folder / "predictions.csv").set_index("name")
+    runs = pd.read_csv(DOCS / cases)
+    runs = runs[(runs["status"] == "ok") & ~runs["flagged"].fillna(False).astype(bool)]
+    key = ["f", "d_um", "h_um", "v_mm_s"]
+    runs = runs.drop(columns=["name"], errors="ignore").merge(points[["name", *key]], on=key, how="inner")
+    assert runs["name"].nunique() == len(points) == 12
+    score = pd.read_csv(folder / "score.csv")
+    summary = {r["target"]: r for r in json.loads((folder / "score.json").read_text())}
+    assert {"mfr", "pd"} <= set(summary)
+    for target, stated in summary.items():
+        g = runs.groupby("name")[target]
+        mean, n = g.mean(), g.size()
+        model_sd, run_sd = predictions[f"{target}_model_sd"], predictions[f"{target}_run_sd"]
+        sd = np.sqrt(model_sd ** 2 + np.clip(run_sd ** 2 - model_sd ** 2, 0, None) / n)
+        z = ((mean - predictions[target]) / sd).dropna()
+        inside = int((z.abs() <= 1.959964).sum())
+        assert stated["inside"] == inside and stated["points"] == len(z) == 12, (check, target)
+        ci = stats.binomtest(inside, len(z)).proportion_ci(confidence_level=0.95, method="exact")
+        assert stated["coverage_low"] == pytest.approx(ci.low) and stated["mean_z2"] == pytest.approx(np.mean(z ** 2))
+        rows = score[score["target"] == target].set_index("name")
+        np.testing.assert_allclose(rows.loc[z.index, "z"], z, rtol=1e-9)
