@@ -9,6 +9,8 @@
     # 3. score the runs against the intervals stated in step 1
     python scripts/heldout.py score --points heldout_points.csv --predictions heldout_predictions.csv \\
         --table results/tables/points.csv --targets mfr pd --out heldout_score.csv
+    # 4. draw one or more scored checks
+    python scripts/heldout.py plot --scores heldout_score.csv --labels "first check" --out heldout
 
 Commit the predictions before the runs: they are the claim the runs test. Errors in the input
 exit with status 2 and a one-line message.
@@ -73,6 +75,16 @@ def score(args) -> int:
     return 0
 
 
+def plot(args) -> int:
+    from spreadmap.surrogate.plots import plot_heldout
+
+    if len(args.labels) != len(args.scores):
+        raise ValueError(f"--labels: {len(args.labels)} given for {len(args.scores)} --scores; give one per score")
+    paths = plot_heldout({label: read_csv(path) for label, path in zip(args.labels, args.scores)}, args.out)
+    print(f"held-out figure: {paths['png']}")
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="heldout.py", description=__doc__.split("\n\n")[0])
     sub = ap.add_subparsers(dest="step", required=True)
@@ -95,9 +107,13 @@ def main(argv=None) -> int:
     s.add_argument("--targets", nargs="+", default=["mfr", "pd"])
     s.add_argument("--level", type=float, default=0.95)
     s.add_argument("--out", help="per point and target (CSV); the summary beside it (.json)")
+    f = sub.add_parser("plot", help="draw scored checks: seed means against the predictions, with their intervals")
+    f.add_argument("--scores", nargs="+", required=True, help="score CSVs (scripts/heldout.py score --out)")
+    f.add_argument("--labels", nargs="+", required=True, help="one label per score CSV")
+    f.add_argument("--out", required=True, help="figure stem (writes .png, .pdf, .csv)")
     args = ap.parse_args(argv)
     try:
-        return choose(args) if args.step == "choose" else score(args)
+        return {"choose": choose, "score": score, "plot": plot}[args.step](args)
     except (ValueError, KeyError, ModelFileError) as e:  # ConfigError is a ValueError
         print(f"heldout.py: error: {e}", file=sys.stderr)
         return 2

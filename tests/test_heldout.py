@@ -155,3 +155,14 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
     r = subprocess.run([*script, "score", "--points", str(tmp_path / "none.csv"), "--predictions", str(predictions),
                         "--table", str(out)], capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and r.stderr.startswith("heldout.py: error: file not found") and r.stderr.count("\n") == 1
+    # the figure: one label per score, the numbers behind it are the scored rows with their check
+    r = subprocess.run([*script, "plot", "--scores", str(out), "--labels", "a", "b", "--out", str(tmp_path / "fig")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "--labels: 2 given for 1 --scores" in r.stderr
+    r = subprocess.run([*script, "plot", "--scores", str(out), str(out), "--labels", "first", "again",
+                        "--out", str(tmp_path / "fig")], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "fig.png").stat().st_size > 10_000 and (tmp_path / "fig.pdf").exists()
+    behind = pd.read_csv(tmp_path / "fig.csv")
+    assert len(behind) == 2 * len(scored) and list(behind["check"].unique()) == ["first", "again"]
+    np.testing.assert_allclose(behind.loc[behind["check"] == "first", "z"], scored["z"])

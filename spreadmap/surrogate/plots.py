@@ -6,6 +6,9 @@
 * ``plot_study``: the study's protocol (held-out R^2 against neurons, min-max over the seeds)
   beside the cross-validated R^2 of the noise-aware models and the ceiling R^2_max.
 * ``plot_learning_curve``: cross-validated RMSE against the number of LDS cases, with the noise SD.
+* ``plot_heldout``: held-out checks (scripts/heldout.py score): each point's seed mean against
+  the prediction made before its runs, with the interval it was scored against, one panel per
+  target, one marker per check.
 """
 from __future__ import annotations
 
@@ -128,3 +131,80 @@ def plot_all(result, outdir, prefix: str = "surrogate") -> dict:
         "r2_vs_neurons": plot_study(result.study_summary, result.validation, outdir / f"{prefix}_r2_vs_neurons"),
         "learning_curve": plot_learning_curve(result.learning, outdir / f"{prefix}_learning_curve"),
     }
+
+
+def plot_heldout(scores: dict[str, pd.DataFrame], stem, level: float = 0.95) -> dict:
+    """scores: check label -> its score table (scripts/heldout.py score's CSV: name, target,
+    predicted, seed_mean, n_runs, sd_of_mean, inside). Each point is drawn at (prediction, seed
+    mean) with a vertical bar of the `level` interval of its seed mean about the prediction, so a
+    point is inside when the y = x line crosses its bar; points outside are drawn hollow in red."""
+    frames = [t.assign(check=label) for label, t in scores.items()]
+    table = pd.concat(frames, ignore_index=True)
+    targets = list(dict.fromkeys(table["target"]))
+    ncols = min(4, len(targets) + 1)  # the last panel: every point's z, target by target
+    nrows = -(-(len(targets) + 1) // ncols)
+    fig = new_figure(4.2 * ncols, 4.2 * nrows + 0.4)
+    axes = np.atleast_1d(fig.subplots(nrows, ncols)).ravel()
+    z = norm.ppf(0.5 + level / 2)
+    markers = ["o", "s", "^", "D"]
+    for ax, t in zip(axes, targets):
+        rows = table[table["target"] == t]
+        for i, (label, r) in enumerate(rows.groupby("check", sort=False)):
+            inside = r["inside"].astype(bool)
+            n_in = int(inside.sum())
+            # the bar is the interval the point was scored against, centred on the prediction
+            ax.errorbar(r["predicted"], r["predicted"], yerr=z * r["sd_of_mean"], fmt="none", ecolor=f"C{i}",
+                        alpha=0.35, elinewidth=5)
+            ax.plot(r.loc[inside, "predicted"], r.loc[inside, "seed_mean"], markers[i % 4], color=f"C{i}", ms=5,
+                    label=f"{label}: {n_in} of {len(r)} inside")
+            if n_in < len(r):
+                ax.plot(r.loc[~inside, "predicted"], r.loc[~inside, "seed_mean"], markers[i % 4], mfc="none",
+                        mec="tab:red", ms=7)
+        lo = float(min(rows["predicted"].min(), rows["seed_mean"].min()))
+        hi = float(max(rows["predicted"].max(), rows["seed_mean"].max()))
+        pad = 0.1 * (hi - lo if hi > lo else 1.0)
+        x = np.array([lo - pad, hi + pad])
+        ax.plot(x, x, "k--", lw=0.8)
+        ax.set_xlim(x)
+        ax.set_ylim(x)
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"predicted {LONG.get(t, t)} (before the runs) [-]")
+        ax.set_ylabel(f"DEM {LONG.get(t, t)}, mean over seeds [-]")
+        ax.set_title(LONG.get(t, t), fontsize=10)
+        ax.legend(loc="upper left", fontsize=7)
+        ax.grid(alpha=0.3)
+    _heldout_z(axes[len(targets)], table, targets, z, markers)
+    for ax in axes[len(targets) + 1:]:
+        ax.set_visible(False)
+    fig.suptitle(f"Held-out points: seed means against the predictions; bars: the {level:.0%} interval of each "
+                 f"seed mean (the model's SD and the noise of its runs)", fontsize=9)
+    return save_figure(fig, stem, table)
+
+
+def _heldout_z(ax, table: pd.DataFrame, targets: list, z_level: float, markers: list) -> None:
+    """Every point's z = (seed mean - prediction) / the SD it was scored with, per target: inside
+    the band |z| <= z_level the point is inside its interval; z scattered much more narrowly than
+    the band (mean z^2 well below 1) says the intervals are too wide."""
+    checks = list(dict.fromkeys(table["check"]))
+    width = 0.6 / max(len(checks), 1)
+    for i, label in enumerate(checks):
+        for j, t in enumerate(targets):
+            r = table[(table["check"] == label) & (table["target"] == t)]
+            if not len(r):
+                continue
+            x = j - 0.3 + width * (i + 0.5) + np.linspace(-0.3, 0.3, len(r)) * width
+            ax.plot(x, r["z"], markers[i % 4], color=f"C{i}", ms=4, alpha=0.8,
+                    label=label.split(" (")[0] if j == 0 else None)
+            ax.plot([j - 0.3 + width * i, j - 0.3 + width * (i + 1)], [np.sqrt(np.mean(r["z"] ** 2))] * 2, "-",
+                    color=f"C{i}", lw=2)
+    ax.axhspan(-z_level, z_level, color="0.9", zorder=0)
+    top = max(z_level + 0.6, float(np.nanmax(np.abs(table["z"]))) + 0.3)
+    ax.set_ylim(-top, top)
+    ax.axhline(1.0, color="0.5", lw=0.8, ls=":")
+    ax.axhline(-1.0, color="0.5", lw=0.8, ls=":")
+    ax.set_xticks(range(len(targets)), [LONG.get(t, t) for t in targets], rotation=35, ha="right", fontsize=8)
+    ax.set_ylabel("z = (seed mean - prediction) / its SD [-]")
+    ax.set_title(f"z of every point; grey: |z| <= {z_level:.2f}; bars: RMS z (1 if the intervals are right)",
+                 fontsize=8)
+    ax.legend(loc="lower left", fontsize=7)
+    ax.grid(alpha=0.3, axis="y")
