@@ -8,7 +8,7 @@
 * ``plot_learning_curve``: cross-validated RMSE against the number of LDS cases, with the noise SD.
 * ``plot_heldout``: held-out checks (scripts/heldout.py score): each point's seed mean against
   the prediction made before its runs, with the interval it was scored against, one panel per
-  target, one marker per check.
+  target, one marker per check; and every point's z with its RMS per target and check.
 """
 from __future__ import annotations
 
@@ -135,9 +135,10 @@ def plot_all(result, outdir, prefix: str = "surrogate") -> dict:
 
 def plot_heldout(scores: dict[str, pd.DataFrame], stem, level: float = 0.95) -> dict:
     """scores: check label -> its score table (scripts/heldout.py score's CSV: name, target,
-    predicted, seed_mean, n_runs, sd_of_mean, inside). Each point is drawn at (prediction, seed
-    mean) with a vertical bar of the `level` interval of its seed mean about the prediction, so a
-    point is inside when the y = x line crosses its bar; points outside are drawn hollow in red."""
+    predicted, seed_mean, n_runs, sd_of_mean, z, inside; scored at `level`). Each point is drawn
+    at (prediction, seed mean) over a vertical bar, the `level` interval of its seed mean about the
+    prediction (centred on the y = x line), so a point is inside when its marker lies on its bar;
+    points outside are ringed in red. The last panel: every point's z per target and check."""
     frames = [t.assign(check=label) for label, t in scores.items()]
     table = pd.concat(frames, ignore_index=True)
     targets = list(dict.fromkeys(table["target"]))
