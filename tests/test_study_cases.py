@@ -11,7 +11,9 @@ import pytest
 from conftest import ROOT, make_workflow, snakemake
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import case_id
+from spreadmap.design import NAMES
 from spreadmap.study_cases import cpu_hours_to_go, finished_table, planned_cases, planned_sweeps, progress
+from spreadmap.table import usable
 
 DOCS = ROOT / "docs" / "study"
 
@@ -203,8 +205,8 @@ def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(publ
         if row["sweep"] == "lds":
             sample = table[table["index"] < row["partition"]]
         else:
-            sample = table[table["k"] ** 4 == row["partition"]]  # a lattice's partition is its size k^4
-        sample = sample[(sample["status"] == "ok") & ~sample["flagged"].fillna(False).astype(bool)]
+            sample = table[table["k"] ** len(NAMES) == row["partition"]]  # a lattice's partition is its size k^4
+        sample = sample[usable(sample)]
         assert len(sample) == row["n_usable"], row
         for target in ("mfr", "pd"):
             x = sample[target].to_numpy(float)
@@ -217,7 +219,7 @@ def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(publ
         changes = parts.loc[parts["sweep"] == sweep, "max_change"].dropna()
         assert (changes > tol).all() and summary["sweeps"][sweep]["converged_n"] is None, sweep
     assert list(parts.loc[parts["sweep"] == "lds", "partition"]) == sorted(cfg["sweeps"]["lds"]["partitions"])
-    assert list(parts.loc[parts["sweep"] == "lattice", "partition"]) == sorted(k ** 4 for k in cfg["sweeps"]["lattice"]["k"])
+    assert list(parts.loc[parts["sweep"] == "lattice", "partition"]) == sorted(k ** len(NAMES) for k in cfg["sweeps"]["lattice"]["k"])
 
 
 def test_published_summary_recomputes_from_the_published_files(published, tmp_path):
@@ -248,8 +250,8 @@ def test_published_heldout_scores_recompute_from_the_cases_and_the_predictions(c
     points = pd.read_csv(folder / "points.csv").drop_duplicates("name")
     predictions = pd.read_csv(folder / "predictions.csv").set_index("name")
     runs = pd.read_csv(DOCS / cases)
-    runs = runs[(runs["status"] == "ok") & ~runs["flagged"].fillna(False).astype(bool)]
-    key = ["f", "d_um", "h_um", "v_mm_s"]
+    runs = runs[usable(runs)]
+    key = list(NAMES)
     runs = runs.drop(columns=["name"], errors="ignore").merge(points[["name", *key]], on=key, how="inner")
     assert runs["name"].nunique() == len(points) == 12
     score = pd.read_csv(folder / "score.csv")
