@@ -21,7 +21,7 @@ from scipy.stats import qmc
 from spreadmap.convergence.stepper import step_number
 from spreadmap.design import NAMES, bounds
 from spreadmap.surrogate.validation import by_band
-from spreadmap.table import usable
+from spreadmap.table import flagged, usable
 
 NOT_YET = "not yet run"
 
@@ -328,10 +328,10 @@ def _regimes(study: Path) -> list[str]:
         lines.append(f"- jamming: none of {len(cases)} cases" + (f" (the rule: MFR < {rule:g})" if rule is not None else "")
                      + f"; the lowest MFR of a usable case {low['mfr']:.3f}, at {where}")
     if "flagged" in cases:
-        flagged = cases[cases["flagged"].fillna(False).astype(bool)]
-        where = (f": h/d {_span(flagged['h_over_d'], '.2f')}, d {_span(flagged['d_um'], '.0f')} um, "
-                 f"v {_span(flagged['v_mm_s'], '.1f')} mm/s{_flag_causes(flagged)}" if len(flagged) else "")
-        lines.append(f"- flagged (kept out of training): {len(flagged)} of {len(cases)} cases{where}")
+        marked = cases[flagged(cases)]
+        where = (f": h/d {_span(marked['h_over_d'], '.2f')}, d {_span(marked['d_um'], '.0f')} um, "
+                 f"v {_span(marked['v_mm_s'], '.1f')} mm/s{_flag_causes(marked)}" if len(marked) else "")
+        lines.append(f"- flagged (kept out of training): {len(marked)} of {len(cases)} cases{where}")
     return lines
 
 
@@ -347,13 +347,13 @@ def _span(values: pd.Series, fmt: str) -> str:
     return low if low == high else f"{low}-{high}"
 
 
-def _flag_causes(flagged: pd.DataFrame) -> str:
+def _flag_causes(marked: pd.DataFrame) -> str:
     """'; why: <cause> (count), ...' over the flagged cases' reasons: each reason's cause is what
     follows its last ': ' (e.g. 'the pile ran down'), or the reason with its numbers as '#'."""
-    if "flag_reason" not in flagged:
+    if "flag_reason" not in marked:
         return ""
     causes, texts = [], {}
-    for reason in flagged["flag_reason"].fillna(""):
+    for reason in marked["flag_reason"].fillna(""):
         for part in filter(None, (p.strip() for p in str(reason).split(";"))):
             cause = part.rsplit(": ", 1)[1] if ": " in part else re.sub(r"\d+(\.\d+)?(e[-+]?\d+)?", "#", part)
             causes.append(cause)
