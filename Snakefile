@@ -6,6 +6,7 @@
 #   snakemake sweeps             the study's protocol: fixed LDS and lattice sweeps, their statistics
 #   snakemake converge           the main job's cases and stopping decision only
 #   snakemake sampling           the DEM-free sampling-design study (on the main job's surrogate too)
+#   snakemake decisions          recommended settings per powder (config `decisions:`) and the explorer page
 #   snakemake fidelity           each preset's error against `reference`, its noise and its cost
 #   snakemake --report report.html   every figure with its caption, the tables and the summary
 from snakemake.utils import min_version
@@ -27,6 +28,7 @@ include: "rules/convergence.smk"
 include: "rules/converge.smk"
 include: "rules/surrogate.smk"
 include: "rules/maps.smk"
+include: "rules/decisions.smk"
 include: "rules/pictures.smk"
 include: "rules/fidelity.smk"
 
@@ -34,7 +36,8 @@ include: "rules/fidelity.smk"
 rule all:
     """The main job: a map you can trust within a budget. LDS cases, then batches until the map
     criteria hold or the budget is spent (rules/converge.smk); the surrogate and the maps on that
-    run's table; predictions at the chosen points; pictures of the named cases."""
+    run's table; predictions at the chosen points; the recommended settings and the explorer page
+    (rules/decisions.smk); pictures of the named cases."""
     default_target: True
     input:
         "results/converge/stopped.json",
@@ -42,6 +45,7 @@ rule all:
         "results/surrogate/model.joblib",
         prediction_targets(),
         "results/maps/sensitivity_ranking_table.csv",
+        rules.decisions.input,
         expand("results/pictures/{name}.png", name=PICTURES.get("cases", [])),
         expand("results/vtk/{name}", name=PICTURES.get("vtk", [])),
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install what spreadmap needs that this machine lacks, and nothing else:
-#   Debian's yade (its own system Python), graphviz (DAG pictures), python3-venv,
+#   Debian's yade (its own system Python), graphviz (DAG pictures), python3-venv, chromium (the
+#   explorer page's browser test and its screenshot: driven over the DevTools pipe, no chromedriver),
 #   and the project venv in .venv from the pinned requirements.txt.
 # Idempotent and silent when nothing is missing.
 set -euo pipefail
@@ -10,6 +11,7 @@ cd "$root"
 missing=()
 command -v yade >/dev/null 2>&1 || missing+=(yade)
 command -v dot >/dev/null 2>&1 || missing+=(graphviz)
+command -v chromium >/dev/null 2>&1 || missing+=(chromium)
 command -v python3 >/dev/null 2>&1 || missing+=(python3)
 python3 -c 'import ensurepip, venv' >/dev/null 2>&1 || missing+=(python3-venv)
 if ((${#missing[@]})); then
