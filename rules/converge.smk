@@ -18,6 +18,8 @@ checkpoint converge_step:
         maps=config.get("maps", {}),
         lds_seed=SWEEPS.get("lds", {}).get("seed", 42),
         noise_calibration=config.get("noise_calibration", []),
+        surrogate=config.get("surrogate", {}),
+        scene_config={k: config[k] for k in ("preset", "presets", "material", "scene", "metrics", "converge")},
     wildcard_constraints:
         n=r"\d+",
     log:

@@ -1,10 +1,12 @@
 """Snakemake entry (checkpoint): after n cases of `snakemake converge`, stop (map criteria met, or
-the case / CPU budget spent) or choose the next batch. The logic is spreadmap.convergence.stepper."""
+the case / CPU budget spent) or choose the next batch. The logic is spreadmap.convergence.stepper;
+the model is the map's model (the `surrogate:` config), the cost of a case the scene's plan."""
 import json
 
 import pandas as pd
 
-from spreadmap.convergence.model import make_gp_fit
+from spreadmap.convergence.cost import PlannedCost
+from spreadmap.convergence.model import make_map_fit
 from spreadmap.convergence.stepper import step
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
@@ -25,9 +27,9 @@ previous = None
 if "previous" in sm.input.keys():
     with open(sm.input.previous) as fh:
         previous = json.load(fh)
-# the map model: a GP behind spreadmap.convergence.model's interface (the surrogate's fit can replace it)
-record = step(table, n, p.converge, previous, fit=make_gp_fit(p.ranges, n_restarts=1), ranges=p.ranges, maps_cfg=p.maps,
-              lds_seed=p.lds_seed, tolerance=p.tolerance, floors=p.floors)
+record = step(table, n, p.converge, previous, fit=make_map_fit(p.surrogate, final=True), ranges=p.ranges,
+              maps_cfg=p.maps, lds_seed=p.lds_seed, tolerance=p.tolerance, floors=p.floors,
+              cost=PlannedCost.from_config(p.scene_config))
 record["noise_calibration"] = list(p.noise_calibration)
 write_text_atomically(sm.output.step, json.dumps(record, indent=1, default=str))
 print(record["summary"])

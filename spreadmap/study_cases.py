@@ -90,9 +90,9 @@ def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.D
 
 
 def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame]) -> dict[str, float]:
-    """Per sweep: the predicted CPU hours of its planned cases not yet finished, from a cost model
-    (spreadmap.convergence.cost) fitted on every finished case of the sweeps; a case shared by two
-    sweeps counts in each. NaN when too few cases have finished for a cost model."""
+    """Per sweep: the predicted CPU hours of its planned cases not yet finished, from the planned-cost
+    law (spreadmap.convergence.cost) calibrated to the finished cases' measured CPU (this machine's
+    speed); a case shared by two sweeps counts in each."""
     nonempty = [t for t in tables.values() if len(t)]
     finished = pd.concat(nonempty, ignore_index=True) if nonempty else pd.DataFrame()
     done = set(finished["case_id"]) if "case_id" in finished else set()
@@ -100,12 +100,11 @@ def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame]) -> dict[str, 
     for case in planned_cases(config):
         if case.case_id not in done and case.sweep in todo:
             todo[case.sweep][case.case_id] = case.point
-    from spreadmap.convergence.cost import fit_cost  # here: the workflow's registry imports this module, not scikit-learn
+    from spreadmap.convergence.cost import PlannedCost  # here: the workflow's registry imports this module
 
-    try:
-        cost = fit_cost(finished.drop_duplicates("case_id"), config.get("ranges"))
-    except (ValueError, KeyError):
-        return {name: float("nan") for name in tables}
+    cost = PlannedCost.from_config(config)
+    if "case_id" in finished:
+        cost = cost.calibrated(finished.drop_duplicates("case_id"))
     out = {}
     for name, points in todo.items():
         X = pd.DataFrame(list(points.values()), columns=list(NAMES)).to_numpy(float)

@@ -1,5 +1,5 @@
 """tools/recheck_stop.py: the published loop's last step decided again under another noise
-calibration. Checked against the step the loop itself recorded, and the noise it is held against
+calibration, with today's map model. Checked against the step the loop itself recorded, and the noise it is held against
 recomputed here from the cases table with numpy (h/d masks written out, not calibrated_noise)."""
 import importlib.util
 import json
@@ -35,8 +35,9 @@ def test_the_published_stop_holds_under_the_shipped_calibration_and_matches_the_
         noise = np.sqrt(np.mean((lds[f"{target}_sd"] * factor) ** 2))
         assert abs(cv[target]["noise_sd"] - noise) < 1e-9
         assert abs(cv[target]["threshold"] - 1.2 * noise) < 1e-9
-        # the GP fitted anew: the loop's own RMSE (thin-gap band only) within 5 %
-        assert abs(cv[target]["rmse"] / own[target]["rmse"] - 1.0) < 0.05
+        # decided anew with the map's model (the loop then used a stand-in GP on raw inputs): its
+        # CV RMSE is no worse than the stand-in's own (MFR 0.0133 against 0.0152 when written)
+        assert cv[target]["rmse"] <= 1.02 * own[target]["rmse"]
         assert cv[target]["ratio"] < 1.0
     lines = recheck_stop.cv_lines("shipped", record)
     assert lines[0].startswith("shipped: stops") and "x the threshold" in lines[1]

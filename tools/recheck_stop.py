@@ -25,7 +25,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import pandas as pd  # noqa: E402
 
 from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.convergence.model import make_gp_fit  # noqa: E402
+from spreadmap.convergence.cost import PlannedCost  # noqa: E402
+from spreadmap.convergence.model import make_map_fit  # noqa: E402
 from spreadmap.convergence.stepper import step, step_number  # noqa: E402
 from spreadmap.metrics.noise import calibrated_noise  # noqa: E402
 
@@ -43,9 +44,9 @@ def recheck(table: pd.DataFrame, cfg: dict, last: dict, previous: dict, calibrat
     if len(table) != n:
         raise ValueError(f"the last step is after {n} cases; the cases table has {len(table)} rows")
     return step(calibrated_noise(table, calibration), n, cfg["converge"], previous,
-                fit=make_gp_fit(cfg["ranges"], n_restarts=1), ranges=cfg["ranges"], maps_cfg=cfg.get("maps", {}),
+                fit=make_map_fit(cfg.get("surrogate"), final=True), ranges=cfg["ranges"], maps_cfg=cfg.get("maps", {}),
                 lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["convergence"].get("tolerance", 0.005),
-                floors=cfg["convergence"].get("floors"))
+                floors=cfg["convergence"].get("floors"), cost=PlannedCost.from_config(cfg))
 
 
 def cv_lines(name: str, record: dict) -> list[str]:

@@ -13,8 +13,9 @@ Acquisitions (``acquisition``)
   box, the machine and the powder planes), sum_r cov(r, c)^2 / (var(c) + noise).  It spends cases
   where they help the maps, not where the variance is largest for its own sake (often the
   corners of the box, which the maps read little).
-* ``ivr_per_cpu``: the same reduction per CPU-second a case there is expected to cost (a model
-  of ln CPU fitted on the run's finished cases, ``cost``): variance reduction bought per unit of
+* ``ivr_per_cpu``: the same reduction per CPU-second a case there is expected to cost (``cost``:
+  the CPU law of the spheres and steps the scene plans for the case, the same on every machine
+  and after every resume, ``cost.PlannedCost``): variance reduction bought per unit of
   the scarce resource. On this scene a case costs 25-1350 s over the design space (fine powders
   at large h/d the most: the pile's standing reserve), so where two candidates teach the maps
   alike, the one that costs a tenth is taken; the LDS share of each batch keeps sampling
@@ -25,7 +26,7 @@ Acquisitions (``acquisition``)
 With several targets (MFR and PD) the scores are summed in units of each target's noise
 variance, so a target counts by how unsure its map is relative to what one case can resolve.
 
-Models without ``posterior_cov`` (any model behind the plain interface of ``model``) get
+Models without a posterior covariance (an MLP ensemble behind ``model``'s interface) get
 ``max_sd`` without the update, with an exclusion radius instead: no two picks (nor a pick and a
 finished case) closer than half the typical spacing of the grown sample.
 
@@ -50,22 +51,28 @@ def candidates(n: int, seed: int) -> np.ndarray:
 
 
 class _Posterior:
-    """Posterior (co)variances of one GP target over candidates C and references R, with exact
-    rank-one updates for every point added to the batch.  Standardised units / noise variance."""
+    """Posterior (co)variances of one GP target over candidates C and references R (physical
+    points, embedded in the model's input space), with exact rank-one updates for every point
+    added to the batch.  Standardised units; scores in units of the target's typical new-run
+    noise variance, so that targets add up by how unsure each map is against what a case resolves."""
 
     def __init__(self, model, C: np.ndarray, R: np.ndarray | None):
-        X = model.X_train_unit
+        X = model.X_train_embedded
         k = model.latent_kernel
         K = k(X) + np.diag(model.train_noise_var())
         L = np.linalg.cholesky(K + 1e-10 * np.eye(len(X)))
-        self.k, self.C, self.R = k, C, R
-        self.VC = np.linalg.solve(L, k(X, C))
-        self.noise = float(model.new_case_noise_var())
-        self.var = np.maximum(k.diag(C) - np.sum(self.VC**2, axis=0), 0.0)
+        Ce = model.embed(C)
+        self.k, self.C = k, Ce
+        self.VC = np.linalg.solve(L, k(X, Ce))
+        self.noise_c = np.asarray(model.new_case_noise_var(C), float)  # a new run's noise at each candidate
+        self.noise = float(np.mean(self.noise_c))  # the target's unit of variance
+        self.var = np.maximum(k.diag(Ce) - np.sum(self.VC**2, axis=0), 0.0)
         self.us: list[np.ndarray] = []  # rank-one update vectors over C
+        self.has_R = R is not None
         if R is not None:
-            VR = np.linalg.solve(L, k(X, R))
-            self.covRC = k(R, C) - VR.T @ self.VC
+            Re = model.embed(R)
+            VR = np.linalg.solve(L, k(X, Re))
+            self.covRC = k(Re, Ce) - VR.T @ self.VC
 
     def cov_C(self, j: int) -> np.ndarray:
         """Current posterior covariance between all candidates and candidate j."""
@@ -78,13 +85,13 @@ class _Posterior:
         """The variance reduction (``ivr``, ``ivr_per_cpu``) or variance (``max_sd``) of each candidate."""
         if acquisition == "max_sd":
             return self.var / self.noise
-        return np.sum(self.covRC**2, axis=0) / (self.var + self.noise) / self.noise
+        return np.sum(self.covRC**2, axis=0) / (self.var + self.noise_c) / self.noise
 
     def add(self, j: int) -> None:
         c = self.cov_C(j)
-        denom = np.sqrt(c[j] + self.noise)
+        denom = np.sqrt(c[j] + self.noise_c[j])
         u = c / denom
-        if self.R is not None:
+        if self.has_R:
             self.covRC = self.covRC - np.outer(self.covRC[:, j] / denom, u)
         self.var = np.maximum(self.var - u**2, 0.0)
         self.us.append(u)
@@ -102,7 +109,7 @@ def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = 
     read (``map_criteria.map_grids`` stacked), needed by ``ivr``; a seeded subset of at most
     ``max_reference`` of them is used.  ``pending``: points already in this batch (physical
     units, e.g. its LDS share), conditioned on before the picks (GP models only). ``cost``:
-    predicted CPU seconds of cases at physical points (``cost.fit_cost``), needed by
+    predicted CPU seconds of cases at physical points (``cost.PlannedCost``), needed by
     ``ivr_per_cpu``.
     """
     if acquisition not in ACQUISITIONS:
@@ -113,23 +120,24 @@ def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = 
     per_cpu = acquisition == "ivr_per_cpu"
     if per_cpu and cost is None:
         raise ValueError("acquisition 'ivr_per_cpu' needs a cost model (cost=)")
-    if not all(hasattr(m, "posterior_cov") for m in models):
+    if not all(getattr(m, "has_covariance", False) for m in models):
         return _fallback(models, n, C, done, ranges)
     R = None
     if acquisition in ("ivr", "ivr_per_cpu"):
         if reference is None:
             raise ValueError("acquisition 'ivr' needs reference points (the map grids)")
-        R = to_unit(np.asarray(reference, float), ranges)
+        R = np.asarray(reference, float)
         if len(R) > max_reference:
             pick = np.random.default_rng([int(seed), 17]).choice(len(R), max_reference, replace=False)
             R = R[np.sort(pick)]
     n_cand = len(C)
+    C = to_physical(C, ranges)
     if pending is not None and len(pending):
-        C = np.vstack([C, to_unit(np.asarray(pending, float), ranges)])
+        C = np.vstack([C, np.asarray(pending, float)])
     # relative cost of each candidate (the median candidate's is 1): the reduction is divided by it
     relative_cost = np.ones(len(C))
     if per_cpu:
-        c = np.asarray(cost(to_physical(C, ranges)), float)
+        c = np.asarray(cost(C), float)
         relative_cost = c / np.median(c[:n_cand])
     posts = [_Posterior(m, C, R) for m in models]
     for j in range(n_cand, len(C)):  # the pending points: update the posterior, never pick them
@@ -144,7 +152,7 @@ def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = 
         chosen.append(j)
         for p in posts:
             p.add(j)
-    return to_physical(C[chosen[first:]], ranges)
+    return C[chosen[first:]]
 
 
 def _fallback(models, n, C, done, ranges) -> np.ndarray:

@@ -1,26 +1,79 @@
-"""What a case will cost before it runs: a model of ln(CPU seconds) over the design space, fitted on
-the run's own finished cases, for the acquisition that spends CPU where it buys the most map
-(``active``'s ``ivr_per_cpu``).
+"""What a case will cost before it runs: a law of the spheres and the steps the scene plans.
 
-Why a GP of ln CPU (the map model's ``make_gp_fit``, on the same unit cube): a case's CPU is set by
-its spheres and steps, which the scene derives from h/d (the pile's standing reserve grows as
-h^2, so the spheres as (h/d)^2 and more), v (the travel time) and the window (longer at small
-h/d); on this scene it spans 25-1350 s over the design space (docs/study), ln CPU is smooth in
-the inputs (a quadratic in ln(h/d) with f, ln d, ln v leaves a residual SD of 0.19 on 60 cases of
-the default scene) and the GP needs no hand-chosen features. The cost predicted is
-exp(mean + var / 2), the mean of a log-normal.
+Why a law of the plan, not of this run's clock
+----------------------------------------------
+The loop's batches go where a case buys the most map per CPU-second (``active``'s
+``ivr_per_cpu``). When the cost came from a model fitted on the run's own measured ``cpu_time``,
+a repeated or resumed run picked other cases (the machine's speed changes between sessions and
+with load: 6 of 16 cases differed after a resume). A case's CPU is set by what the scene plans
+for it, ``scene.scene_parameters``: its sphere count N and its estimated steps S, both known
+before it runs and the same on every machine. The law is
+
+    CPU [s] = exp(ln_a) * N^b_particles * S^b_steps
+
+with exponents fitted once on the published cases (``fit_law``; docs/replay/cost_law.json): the
+contact loop's cost per sphere-step grows with the pile (N^1.092 with S^1.324 over 1,041 published
+cases, the planned steps overestimating the run's by ~1.5x at the thin gaps where the window
+closes early). The acquisition divides by the *relative* cost of a candidate (against the median
+candidate's), so only the exponents decide the batch; ``ln_a`` scales the absolute CPU that the
+modelled budget and the replay count, and ``calibrated`` rescales it to this machine's measured
+cases for estimates of the CPU still to go.
 """
 from __future__ import annotations
 
-from typing import Callable
+from dataclasses import dataclass
+from typing import Iterable, Mapping
 
 import numpy as np
 import pandas as pd
 
 from ..design import NAMES
-from .model import FitFunction, make_gp_fit
 
-MIN_CASES = 5  # finished cases with a CPU time a cost model needs
+DEFAULT_LAW = {"ln_a": -18.615, "b_particles": 1.092, "b_steps": 1.324}
+
+
+def planned_work(points: np.ndarray, config: Mapping, preset: str) -> np.ndarray:
+    """(N spheres, estimated steps) the scene plans for each design point (physical, NAMES order)."""
+    from ..scene import scene_parameters
+
+    out = np.empty((len(points), 2))
+    for i, p in enumerate(np.asarray(points, float)):
+        params = scene_parameters(dict(zip(NAMES, map(float, p))), preset, dict(config), "cost")
+        out[i] = params["n_particles"], params["estimated_steps"]
+    return out
+
+
+@dataclass
+class PlannedCost:
+    """cost(X) -> CPU seconds of cases at physical points X, from the scene's plan and the law."""
+
+    config: Mapping
+    preset: str
+    ln_a: float = DEFAULT_LAW["ln_a"]
+    b_particles: float = DEFAULT_LAW["b_particles"]
+    b_steps: float = DEFAULT_LAW["b_steps"]
+
+    @classmethod
+    def from_config(cls, config: Mapping, preset: str | None = None) -> "PlannedCost":
+        law = {**DEFAULT_LAW, **dict((config.get("converge") or {}).get("cost_law") or {})}
+        return cls(config, preset or config["preset"], float(law["ln_a"]), float(law["b_particles"]),
+                   float(law["b_steps"]))
+
+    def of_work(self, work: np.ndarray) -> np.ndarray:
+        work = np.asarray(work, float)
+        return np.exp(self.ln_a + self.b_particles * np.log(work[:, 0]) + self.b_steps * np.log(work[:, 1]))
+
+    def __call__(self, points) -> np.ndarray:
+        return self.of_work(planned_work(points, self.config, self.preset))
+
+    def calibrated(self, table: pd.DataFrame) -> "PlannedCost":
+        """The same law with ``ln_a`` set so that its median ratio to the finished cases' measured
+        ``cpu_time`` is 1 (this machine's speed); unchanged with none finished."""
+        X, cpu = finished_costs(table)
+        if not len(cpu):
+            return self
+        ratio = np.median(np.log(cpu) - np.log(self(X)))
+        return PlannedCost(self.config, self.preset, self.ln_a + float(ratio), self.b_particles, self.b_steps)
 
 
 def finished_costs(table: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
@@ -30,16 +83,29 @@ def finished_costs(table: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
     return table.loc[ok, list(NAMES)].to_numpy(float), cpu[ok]
 
 
-def fit_cost(table: pd.DataFrame, ranges: dict | None = None, fit: FitFunction | None = None) -> Callable[[np.ndarray], np.ndarray]:
-    """cost(X) -> predicted CPU seconds of cases at X (physical units, NAMES order), from the
-    finished cases of ``table``. Raises ValueError with fewer than MIN_CASES of them."""
-    X, cpu = finished_costs(table)
-    if len(cpu) < MIN_CASES:
-        raise ValueError(f"a cost model needs {MIN_CASES} finished cases with a CPU time; the table has {len(cpu)}")
-    model = (fit or make_gp_fit(ranges))(X, np.log(cpu))
-
-    def cost(points: np.ndarray) -> np.ndarray:
-        mean, sd = model.predict(np.asarray(points, float), return_std=True)
-        return np.exp(mean + 0.5 * (sd**2 + model.noise_sd**2))
-
-    return cost
+def fit_law(tables: Iterable[pd.DataFrame], config: Mapping) -> dict:
+    """Fit the law's exponents on finished cases of several tables (each table one machine and
+    session, with an intercept of its own: the sessions' machines differed up to 2x in speed), and
+    ``ln_a`` as the median of those intercepts. Cases whose preset the config does not know are
+    left out. Returns the law and its fit: residual SD (within sessions), cases, per-table
+    intercepts."""
+    Ns, Ss, ys, groups = [], [], [], []
+    for g, t in enumerate(tables):
+        t = t[t["preset"].astype(str).isin(config["presets"])]
+        for preset, part in t.groupby("preset"):
+            X, cpu = finished_costs(part)
+            if not len(cpu):
+                continue
+            w = planned_work(X, config, str(preset))
+            Ns.append(w[:, 0]); Ss.append(w[:, 1]); ys.append(np.log(cpu)); groups.append(np.full(len(cpu), g))
+    if not ys:
+        raise ValueError("no finished case with a CPU time and a known preset to fit the cost law on")
+    N, S, y, grp = (np.concatenate(a) for a in (Ns, Ss, ys, groups))
+    labels = np.unique(grp)
+    D = np.column_stack([(grp == g).astype(float) for g in labels] + [np.log(N), np.log(S)])
+    coef, *_ = np.linalg.lstsq(D, y, rcond=None)
+    resid = y - D @ coef
+    intercepts = coef[:len(labels)]
+    return {"ln_a": float(np.median(intercepts)), "b_particles": float(coef[-2]), "b_steps": float(coef[-1]),
+            "residual_sd": float(np.std(resid, ddof=D.shape[1])), "cases": int(len(y)),
+            "table_intercepts": [float(c) for c in intercepts]}

@@ -1,47 +1,45 @@
-"""The interface the map-level criteria and the active batches need from a fitted model.
+"""The loop's model is the map's model: the surrogate that draws the maps, behind the small
+interface the loop's criteria and its batches need.
+
+One model
+---------
+The main job used to decide with a stand-in GP (raw unit inputs, its own noise handling) and draw
+the maps with the surrogate (``spreadmap.surrogate.models``: physics inputs f, ln d, ln(h/d), v,
+per-case calibrated noise). The two disagreed about how good the map was (at 152 cases of the
+study: MFR's CV RMSE 1.15x the noise for the surrogate, ~1.48x for the stand-in), so "converged"
+was said of a model the user never saw. Here the loop fits exactly the class, inputs, kernel and
+noise model that ``surrogate.fitting.fit_surrogate`` fits for the maps (``make_model`` with the
+``surrogate:`` config), on the same usable rows and the same calibrated per-case SDs.
 
 The interface (all that ``map_criteria`` and ``active`` use)
 -----------------------------------------------------------
-A *map model* is a fitted model of one target (MFR or PD) over the design inputs, in physical
-units and ``design.NAMES`` order (f, d_um, h_um, v_mm_s), with
+A *map model* of one target, inputs in physical units and ``design.NAMES`` order:
 
 * ``predict(X, return_std=True) -> (mean[n], sd[n])``: the posterior mean of the noise-free
-  response and its standard deviation (the model's uncertainty about the *map*, not the noise of
-  a new case); ``predict(X)`` returns the mean alone;
-* ``noise_sd: float``: the model's estimate of one case's noise SD (target units), used when the
-  table carries no per-case noise.
+  response and its SD (the model's uncertainty about the *map*, not a new run's noise);
+* ``noise_sd: float``: the RMS noise SD of one run over the training cases (target units);
+* ``run_sd(X)``: the noise SD of one new run at X (the per-case noise model);
+* ``draws(X, n, rng)``: joint posterior draws of the map at X, shape (n, len(X)).
 
-A *fit function* ``fit(X[n, 4], y[n], noise_sd[n] or None) -> map model`` builds one from data;
-``fit_table(table, target, fit)`` applies it to the usable rows of a results table (per-case
-noise from the ``{target}_sd`` column when the table has one).
+Gaussian processes add what the greedy batch needs (exact posterior covariances, in the model's
+standardised units): ``embed``, ``latent_kernel``, ``X_train_embedded``, ``train_noise_var`` and
+``new_case_noise_var``. An MLP ensemble has none of these: ``active`` then falls back to the
+largest model SD with an exclusion radius.
 
-Active batches need one thing more, the posterior covariance between points, which a Gaussian
-process has in closed form: ``GPMapModel.posterior_cov``.  ``active`` uses it when present and
-falls back to "largest posterior SD, one point at a time, no update" for any other model.
-
-The model behind the interface here
------------------------------------
-``fit_gp``: scikit-learn's ``GaussianProcessRegressor`` on inputs scaled to the unit cube and
-standardised outputs, kernel ``C * Matern(nu=2.5, one length scale per input) + White``.  The
-white term is the noise the data show beyond any per-case noise given (``alpha``, the per-case
-variance, on the diagonal), so the GP smooths the noise instead of fitting it.  Hyperparameters
-by maximum marginal likelihood (L-BFGS-B, ``n_restarts`` restarts, seeded).  This is a stand-in
-with the same interface as the project's noise-aware surrogate; the workflow can pass that
-surrogate's fit function instead.
+A *fit function* ``fit(X[n, 4], y[n], noise_sd[n] or None) -> map model`` builds one
+(``make_map_fit``); ``fit_table`` applies it to the usable rows of a results table.
 """
 from __future__ import annotations
 
-import warnings
-from typing import Callable, Protocol
+from typing import Callable, Mapping, Protocol
 
 import numpy as np
 import pandas as pd
-from sklearn.exceptions import ConvergenceWarning
-from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import ConstantKernel, Matern, WhiteKernel
 
-from ..design import NAMES, to_unit
+from ..design import NAMES
 from ..table import usable
+
+MODEL_KINDS = ("gp", "mlp")
 
 
 class MapModel(Protocol):
@@ -53,100 +51,90 @@ class MapModel(Protocol):
 FitFunction = Callable[[np.ndarray, np.ndarray, "np.ndarray | None"], MapModel]
 
 
-class GPMapModel:
-    """A fitted GP behind the map-model interface (see the module docstring)."""
+class SurrogateMapModel:
+    """A fitted ``surrogate.models`` model (GP or MLP ensemble) behind the map-model interface."""
 
-    def __init__(self, gp: GaussianProcessRegressor, ranges: dict | None, y_scale: float,
-                 case_noise_var: np.ndarray | None):
-        self.gp = gp
-        self.ranges = ranges
-        self._y_scale = float(y_scale)  # sklearn's normalize_y scale (target units)
-        k = gp.kernel_
-        self.latent_kernel = k.k1  # C * Matern, in standardised units
-        self.white_var = float(k.k2.noise_level)  # standardised units
-        self._case_var = case_noise_var  # per-case noise variance (standardised), or None
-        typical = self.white_var + (float(np.mean(case_noise_var)) if case_noise_var is not None else 0.0)
-        self.noise_sd = float(np.sqrt(typical) * self._y_scale)
-
-    def _unit(self, X) -> np.ndarray:
-        return to_unit(np.asarray(X, float), self.ranges)
+    def __init__(self, model):
+        self.model = model
+        self.kind = model.kind
+        X = getattr(model, "train_X_", None)
+        self.noise_sd = float(np.sqrt(np.mean(model.noise_sd(X) ** 2))) if X is not None else float("nan")
 
     def predict(self, X, return_std: bool = False):
-        mean, sd = self.gp.predict(self._unit(X), return_std=True)
-        if not return_std:
-            return mean
-        # sklearn's sd includes the white (noise) variance: take it out to get the map's SD
-        var = np.maximum(sd**2 - self.white_var * self._y_scale**2, 0.0)
-        return mean, np.sqrt(var)
+        mean, sd = self.model.latent(np.asarray(X, float))
+        return (mean, sd) if return_std else mean
 
-    # ---- what active batches use (standardised units; the scale cancels in the ratios) ----
+    def run_sd(self, X) -> np.ndarray:
+        return self.model.noise_sd(np.asarray(X, float))
+
+    def draws(self, X, n: int, rng) -> np.ndarray:
+        return self.model.draws(np.asarray(X, float), n, rng)
+
+    # ---- what the greedy batch uses (GP only; standardised target units) ----------------------
     @property
-    def X_train_unit(self) -> np.ndarray:
-        return self.gp.X_train_
+    def has_covariance(self) -> bool:
+        return self.kind == "gp"
+
+    def embed(self, X) -> np.ndarray:
+        """Physical points in the model's input space (its features, standardised on its cases)."""
+        return self.model.scale_(np.asarray(X, float))
+
+    @property
+    def latent_kernel(self):
+        if self.kind != "gp":
+            raise AttributeError(f"a {self.kind} model has no kernel")
+        return self.model.signal_
+
+    @property
+    def X_train_embedded(self) -> np.ndarray:
+        return self.model.gp_.X_train_
 
     def train_noise_var(self) -> np.ndarray:
-        """Noise variance on the diagonal for each training case (standardised units)."""
-        n = self.gp.X_train_.shape[0]
-        case = self._case_var if self._case_var is not None else np.zeros(n)
-        return case + self.white_var
+        """Noise variance on the diagonal for each training case (per-case and excess)."""
+        alpha = np.broadcast_to(np.asarray(self.model.gp_.alpha, float), (len(self.X_train_embedded),))
+        return alpha + self.model.excess_var_
 
-    def new_case_noise_var(self) -> float:
-        """Noise variance of a case not yet run (standardised units): the typical one."""
-        return (self.noise_sd / self._y_scale) ** 2
-
-    def posterior_cov(self, A_unit: np.ndarray, B_unit: np.ndarray) -> np.ndarray:
-        """Posterior covariance of the noise-free response between unit-cube points A and B."""
-        X = self.gp.X_train_
-        K = self.latent_kernel(X) + np.diag(self.train_noise_var())
-        L = np.linalg.cholesky(K + 1e-10 * np.eye(len(X)))
-        va = np.linalg.solve(L, self.latent_kernel(X, A_unit))
-        vb = va if B_unit is A_unit else np.linalg.solve(L, self.latent_kernel(X, B_unit))
-        return self.latent_kernel(A_unit, B_unit) - va.T @ vb
-
-    def posterior_var(self, A_unit: np.ndarray) -> np.ndarray:
-        X = self.gp.X_train_
-        K = self.latent_kernel(X) + np.diag(self.train_noise_var())
-        L = np.linalg.cholesky(K + 1e-10 * np.eye(len(X)))
-        v = np.linalg.solve(L, self.latent_kernel(X, A_unit))
-        return np.maximum(self.latent_kernel.diag(A_unit) - np.sum(v**2, axis=0), 0.0)
+    def new_case_noise_var(self, X) -> np.ndarray:
+        """Noise variance of a new run at each physical point X."""
+        return (self.run_sd(X) / self.model.y_sd_) ** 2
 
 
-def make_gp_fit(ranges: dict | None = None, nu: float = 2.5, n_restarts: int = 0,
-                seed: int = 0) -> FitFunction:
-    """A fit function ``fit(X, y, noise_sd=None) -> GPMapModel`` (see the module docstring).
+def surrogate_settings(surrogate_cfg: Mapping | None) -> dict:
+    """The surrogate's effective config (schema defaults filled)."""
+    from ..surrogate.settings import make_config
 
-    Every fit starts from the same initial hyperparameters (no warm start: measured, a start
-    from the previous batch's optimum carries a noise-interpolating optimum of a small sample,
-    which maximum likelihood can prefer at ~32 cases, on to every later batch).
-    """
+    return make_config(dict(surrogate_cfg or {}))
 
-    def fit(X, y, noise_sd=None) -> GPMapModel:
+
+def loop_kind(cfg: Mapping) -> str:
+    """The model kind the loop fits: the map model's (``gp`` or ``mlp``); with ``best``, which the
+    surrogate decides per target by validation after the run, the loop decides with the GP."""
+    return cfg["model"] if cfg["model"] in MODEL_KINDS else "gp"
+
+
+def make_map_fit(surrogate_cfg: Mapping | None = None, final: bool = False) -> FitFunction:
+    """``fit(X, y, noise_sd=None) -> SurrogateMapModel``: the surrogate's map model of one target
+    (``final``: with the final fit's optimizer restarts, as the model the maps are drawn from)."""
+    from ..surrogate.models import make_model
+
+    cfg = surrogate_settings(surrogate_cfg)
+    kind = loop_kind(cfg)
+
+    def fit(X, y, noise_sd=None) -> SurrogateMapModel:
         X = np.asarray(X, float)
         y = np.asarray(y, float)
         if X.ndim != 2 or X.shape[1] != len(NAMES) or len(X) != len(y):
             raise ValueError(f"fit needs X[n, {len(NAMES)}] and y[n]; got {X.shape} and {y.shape}")
         if len(y) < 3:
             raise ValueError(f"fit needs at least 3 cases, got {len(y)}")
-        scale = float(np.std(y)) or 1.0
-        case_var = None
-        alpha = 1e-10
+        sd = None
         if noise_sd is not None:
             sd = np.asarray(noise_sd, float)
             if sd.shape != y.shape or not np.all(np.isfinite(sd)) or np.any(sd < 0):
                 raise ValueError("noise_sd must be finite, >= 0 and one per case")
-            case_var = (sd / scale) ** 2
-            alpha = case_var + 1e-10
-        # the start: a smooth model with a tenth of the variance as noise (measured: a start at
-        # length 0.5 and noise 0.01 ended in a rougher optimum of lower likelihood, map error 2x)
-        kernel = (ConstantKernel(1.0, (1e-3, 1e3))
-                  * Matern(length_scale=np.full(len(NAMES), 1.0), length_scale_bounds=(1e-2, 1e2), nu=nu)
-                  + WhiteKernel(0.1, (1e-6, 1.0)))
-        gp = GaussianProcessRegressor(kernel=kernel, alpha=alpha, normalize_y=True,
-                                      n_restarts_optimizer=n_restarts, random_state=seed)
-        with warnings.catch_warnings():  # hyperparameters at a bound are legitimate here
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            gp.fit(to_unit(X, ranges), y)
-        return GPMapModel(gp, ranges, gp._y_train_std, case_var)
+        model = make_model(kind, cfg, final=final).fit(X, y, sd)
+        model.train_X_ = X
+        return SurrogateMapModel(model)
 
     return fit
 

@@ -15,13 +15,15 @@ model's mean against the known truth, over the map grids, falls to a target.
 * Designs: ``lds`` (scrambled Halton prefix, seeded), ``random`` (i.i.d. uniform, seeded),
   ``lattice`` (k^4 points, ends included; only its noise varies with the seed), ``active``
   (LDS start, then batches by ``active.choose_batch``, integrated variance reduction over the
-  map grids, candidates seeded), ``active_per_cpu`` (the same per predicted CPU-second: a cost
-  model fitted on the run's cases' observed CPU, ``cost.fit_cost``).
+  map grids, candidates seeded), ``active_per_cpu`` (the same per planned CPU-second: the law
+  ``case_cost`` itself, as the loop uses the scene's planned cost).
 * CPU: each case costs ``case_cost`` (the default scene's law, below) times a log-normal
   scatter of SD 0.19; every checkpoint records the CPU spent so far (``cpu_cases``), so the
   designs are compared at equal CPU as well as at equal cases (``cost_study``).
-* Model: the GP of ``model.make_gp_fit`` (the same for every design), refitted from scratch at
-  every checkpoint.
+* Model: the map's model, ``model.make_map_fit`` (the same for every design), refitted from
+  scratch at every checkpoint. (docs/sampling's published numbers were measured with an earlier
+  stand-in GP on unit inputs and a cost fitted on observed CPU; the loop's replay, docs/replay,
+  is the current study of the loop.)
 * Map RMSE: over the map grids of ``map_criteria.map_grids`` (box cell centres, machine plane,
   powder plane), also reported on the box alone.  ``n_needed``: the first checkpoint at which
   the map RMSE is at or below the target; censored (NaN) when not reached within the budget.
@@ -43,9 +45,8 @@ import pandas as pd
 from ..design import NAMES, to_physical, to_unit
 from ..sampling import halton_unit, lattice_unit
 from . import active
-from .cost import fit_cost
 from .map_criteria import map_grids
-from .model import make_gp_fit
+from .model import make_map_fit
 from .sampling_study import flow_curve
 
 MEAN, SD = 0.29, 0.085
@@ -127,7 +128,7 @@ def one_run(method: str, noise: str, seed: int, checkpoints: Sequence[int], star
     def spent(u_new):  # observed CPU of new cases: the law with its scatter (its own random stream)
         return case_cost(u_new) * np.exp(COST_SCATTER * cost_rng.standard_normal(len(u_new)))
 
-    fit = make_gp_fit(seed=seed)
+    fit = make_map_fit({"seed": int(seed)})
     n_max = max(checkpoints)
     rows = []
     if method in ("lds", "random", "lattice"):
@@ -172,7 +173,8 @@ def one_run(method: str, noise: str, seed: int, checkpoints: Sequence[int], star
         step = min(batch, n_max - n)
         cost = None
         if acquisition == "ivr_per_cpu":
-            cost = fit_cost(pd.DataFrame({**dict(zip(NAMES, to_physical(u).T)), "status": "ok", "cpu_time": cpu}))
+            def cost(P):  # the plan's cost: the law itself, as the loop's planned cost (cost.PlannedCost)
+                return case_cost(to_unit(np.asarray(P, float)))
         new = active.choose_batch([m], step, seed=seed * 1000 + n, n_candidates=n_candidates,
                                   acquisition=acquisition, reference=reference, cost=cost)
         if rows and rows[-1]["n"] == n:

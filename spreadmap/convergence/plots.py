@@ -338,7 +338,8 @@ def plot_cost_study(table: pd.DataFrame, targets: Sequence[float], path_stem) ->
 # ----------------------------------------------------------------------------------------------
 # (5) the path of `snakemake converge`
 # ----------------------------------------------------------------------------------------------
-CRITERION_LABELS = {"cv_rmse": "CV RMSE / (factor x noise SD)",
+CRITERION_LABELS = {"map_error": "map error / tolerance (the larger of CV net of noise, posterior)",
+                    "cv_rmse": "CV RMSE / (factor x noise SD)",
                     "map_change": "map change / (fraction x noise SD)",
                     "ci": "CI half-width / tolerance (worst statistic)"}
 

@@ -7,14 +7,18 @@ on the cases in run order, same batches), and decides:
 
 * ``criteria met``: every criterion of ``converge.stop_on`` holds (``hold_for`` batches in a row);
 * ``case budget``: ``converge.budget`` cases run;
-* ``CPU budget``: the cases' CPU time (their ``cpu_time``, else ``wall_time``) reached
-  ``converge.cpu_budget_h``;
+* ``CPU budget``: the cases' modelled CPU (``cost.PlannedCost``: the law of the spheres and
+  steps each case's scene planned, the same on every machine, so that the same config stops at
+  the same batch anywhere) reached ``converge.cpu_budget_h``; the measured CPU (``cpu_time``,
+  else ``wall_time``) is reported beside it (without a cost law, the measured CPU decides);
 * otherwise the next batch: ``converge.batch`` points (fewer if the budget is closer): with
   ``sampling: active`` a share ``lds_share`` of them are the next points of the LDS sequence and
   the rest are chosen by ``active.choose_batch`` (conditioned on that LDS share; with
-  ``acquisition: ivr_per_cpu`` against a cost model fitted on the finished cases' CPU times,
-  ``cost.fit_cost``, or plain ``ivr`` while fewer than five cases have one: the record's
-  ``acquisition`` says which); with ``sampling: lds`` all are the next LDS points.
+  ``acquisition: ivr_per_cpu`` against the planned cost, ``cost.PlannedCost``); with
+  ``sampling: lds`` all are the next LDS points.
+
+The model is the map's model (``model.make_map_fit`` on the ``surrogate:`` config): what the step
+calls converged is what results/maps draws.
 
 Why an LDS share: active cases are not a uniform sample of the design space, so statistics of
 the cases (the study's five statistics, their bootstrap CIs) would describe where the model was
@@ -28,7 +32,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -38,8 +42,7 @@ from ..design import NAMES
 from ..sampling import halton
 from ..table import usable
 from . import active, map_criteria
-from .cost import fit_cost
-from .model import FitFunction, make_gp_fit
+from .model import FitFunction, make_map_fit
 from .study_rule import batches_until_converged
 
 STEP_DEFAULTS: dict[str, Any] = {
@@ -92,14 +95,26 @@ def _study_rule(table: pd.DataFrame, targets: Sequence[str], s: Mapping, n: int,
 def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | None = None,
          fit: FitFunction | None = None, ranges: dict | None = None, maps_cfg: Mapping | None = None,
          lds_seed: int = 42, targets: Sequence[str] = ("mfr", "pd"),
-         tolerance: float = 0.005, floors: Mapping | None = None) -> dict[str, Any]:
+         tolerance: float = 0.005, floors: Mapping | None = None,
+         cost: Callable[[np.ndarray], np.ndarray] | None = None,
+         models_out: dict | None = None) -> dict[str, Any]:
     """The decision after ``n`` cases (``table``: their rows in run order, the previous step's
-    ``n_prev`` cases first).  Returns the JSON-ready step record (see the module docstring)."""
+    ``n_prev`` cases first).  ``fit``: the map model's fit function (default: the surrogate's,
+    default config); ``cost``: planned CPU seconds of cases at physical points (``cost.PlannedCost``),
+    needed by ``acquisition: ivr_per_cpu`` and used for the CPU budget; ``models_out``: a dict
+    that receives the fitted map models by target.  Returns the JSON-ready step record (see the
+    module docstring)."""
     s = step_settings(cfg)
     crit = s["criteria"]
     if len(table) != n:
         raise ValueError(f"the step after {n} cases got a table of {len(table)} rows")
-    fit = fit or make_gp_fit(ranges)
+    unknown = sorted(set(crit["map_error"]["tolerance"]) - set(targets))
+    if unknown:
+        raise ValueError(f"config key 'converge.map_error.tolerance': targets {unknown} are not the loop's "
+                         f"targets; allowed: {list(targets)}")
+    if s["sampling"] == "active" and s["acquisition"] == "ivr_per_cpu" and cost is None:
+        raise ValueError("config key 'converge.acquisition': ivr_per_cpu needs the planned cost of a case (cost=)")
+    fit = fit or make_map_fit()
     grids = map_criteria.map_grids(maps_cfg, ranges, box_k=int(crit["map_change"]["box_k"]))
     n_prev = None if prev_step is None else int(prev_step["n"])
     is_lds = [True] * n if prev_step is None else list(prev_step["is_lds"])
@@ -108,19 +123,26 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
     lds_table = table[np.asarray(is_lds, bool)]
     result = map_criteria.evaluate(table, fit, targets, None if n_prev is None else table.iloc[:n_prev],
                                    grids, crit, seed=0, floors=floors, stats_table=lds_table)
+    if models_out is not None:
+        models_out.update(result["models"])
     tracker = map_criteria.Tracker(crit["stop_on"], crit["hold_for"],
                                    None if prev_step is None else prev_step["criteria"]["path"])
     tracker.add(n, result)
     cpu_h = cpu_hours(table)
+    modelled_h = (float(np.sum(cost(table[list(NAMES)].to_numpy(float)))) / 3600.0 if cost is not None
+                  else float("nan"))
+    budget_h = modelled_h if cost is not None else cpu_h
     reason = None
     if tracker.stop():
         reason = "criteria met"
     elif n >= int(s["budget"]):
         reason = "case budget"
-    elif s["cpu_budget_h"] is not None and cpu_h >= float(s["cpu_budget_h"]):
+    elif s["cpu_budget_h"] is not None and budget_h >= float(s["cpu_budget_h"]):
         reason = "CPU budget"
     record: dict[str, Any] = {
         "n": int(n), "usable": int(usable(table).sum()), "cpu_hours": cpu_h,
+        "cpu_hours_modelled": modelled_h,
+        "map_statistics": result.get("map_statistics", {}),
         "stop": reason is not None, "reason": reason or "criteria not met yet",
         "criteria": {**tracker.summary(), "at_this_batch": map_criteria.to_json(result)},
         "study_rule": _study_rule(lds_table, targets, s, len(lds_table), tolerance, floors),
@@ -141,17 +163,13 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
         if k_lds < size:
             reference = np.vstack(list(grids.values()))
             models = [result["models"][t] for t in targets]
-            acquisition, cost = s["acquisition"], None
-            if acquisition == "ivr_per_cpu":
-                try:
-                    cost = fit_cost(table, ranges)
-                except ValueError:  # too few cases with a CPU time: no cost model, the plain reduction
-                    acquisition = "ivr"
+            acquisition = s["acquisition"]
             record["acquisition"] = acquisition
             more = active.choose_batch(models, size - k_lds, seed=int(s["seed"]) * 1_000_003 + n,
                                        done=table[list(NAMES)].to_numpy(float),
                                        n_candidates=int(s["candidates"]), acquisition=acquisition,
-                                       reference=reference, ranges=ranges, pending=pts, cost=cost)
+                                       reference=reference, ranges=ranges, pending=pts,
+                                       cost=cost if acquisition == "ivr_per_cpu" else None)
             pts = np.vstack([pts, more])
         record["next_n"] = n + size
         record["next_batch"] = [rounded(dict(zip(NAMES, map(float, p)))) for p in pts]
@@ -163,7 +181,9 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
 def describe(record: Mapping[str, Any]) -> str:
     """A few lines a user reads: why the run stopped (or not), how far each criterion is."""
     c = record["criteria"]
-    lines = [f"after {record['n']} cases ({record['usable']} usable, {record['cpu_hours']:.2f} CPU h): "
+    modelled = record.get("cpu_hours_modelled")
+    also = (f", {modelled:.2f} modelled" if modelled is not None and np.isfinite(modelled) else "")
+    lines = [f"after {record['n']} cases ({record['usable']} usable, {record['cpu_hours']:.2f} CPU h measured{also}): "
              f"{record['reason']}"]
     for name in map_criteria.CRITERIA:
         now = c["now"].get(name)
@@ -177,6 +197,10 @@ def describe(record: Mapping[str, Any]) -> str:
         targets = ((c.get("at_this_batch") or {}).get(name) or {}).get("targets") or {}
         scored = {t.get("scored") for t in targets.values()} - {None, "all cases"}
         note = f" (scored on {scored.pop()})" if name == "cv_rmse" and scored else ""
+        if name == "map_error" and targets:
+            note = " (" + "; ".join(
+                f"{t}: {v['estimate']:.4f} of {v['tolerance']:.4f} [CV net of noise {v['cv_net_of_noise']:.4f}, "
+                f"posterior {v['posterior_rms_sd']['worst']:.4f}]" for t, v in targets.items()) + ")"
         lines.append(f"  {name} ({req}): {state}{note}; {held}")
     sr = record["study_rule"]
     lines.append(f"  study's rule (reported): {'converged at ' + str(sr['converged_at']) if sr['converged'] else 'not converged'}"
