@@ -1,0 +1,134 @@
+"""The loop's replay (spreadmap.convergence.replay): the real step code against a truth fitted on the
+published cases, with their noise law and the planned-cost law; prints and writes what the stop rule
+is worth, per design.
+
+    .venv/bin/python benchmarks/replay.py --out docs/replay --seeds 20 --jobs 2
+    .venv/bin/python benchmarks/replay.py --out /tmp/r --seeds 2 --max-cases 64 --designs active_per_cpu
+
+Writes: cost_law.json (the law fitted on the published cases), paths.csv (one row per replay and
+step: cases, modelled CPU, the rule's estimate and the true map error per target), stops.csv and
+honesty.csv (at each tolerance of --tolerances), replay.png, meta.json. Re-running with the same
+arguments reuses paths.csv rows already computed (by design and seed).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from spreadmap.config import load  # noqa: E402
+from spreadmap.convergence import replay  # noqa: E402
+from spreadmap.convergence.cost import fit_law  # noqa: E402
+from spreadmap.files import atomic_path, write_text_atomically  # noqa: E402
+from spreadmap.metrics.noise import calibrated_noise  # noqa: E402
+
+PUBLISHED = ["cases_converge.csv", "cases_lds.csv", "cases_lattice.csv", "cases_heldout.csv", "cases_heldout2.csv"]
+_WORLD = None
+
+
+def published_tables(study: Path) -> list[pd.DataFrame]:
+    return [pd.read_csv(study / name) for name in PUBLISHED if (study / name).exists()]
+
+
+def _init(world_path):
+    global _WORLD
+    import joblib
+
+    _WORLD = joblib.load(world_path)
+
+
+def _one(args):
+    design, seed, max_cases, max_cpu_h = args
+    t0 = time.process_time()
+    path = replay.replay_one(_WORLD, design, seed, max_cases=max_cases, max_cpu_h=max_cpu_h)
+    return path.assign(replay_cpu_s=time.process_time() - t0)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--study", type=Path, default=ROOT / "docs" / "study")
+    ap.add_argument("--fidelity", type=Path, default=ROOT / "docs" / "fidelity" / "cases_presets.csv")
+    ap.add_argument("--config", type=Path, default=ROOT / "config.yaml")
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--max-cases", type=int, default=160)
+    ap.add_argument("--max-cpu-h", type=float, default=None)
+    ap.add_argument("--designs", nargs="*", default=[d["name"] for d in replay.DESIGNS])
+    ap.add_argument("--tolerances", nargs="*", type=float, default=[0.010, 0.012, 0.015, 0.02])
+    ap.add_argument("--jobs", type=int, default=2)
+    a = ap.parse_args(argv)
+    import joblib
+
+    a.out.mkdir(parents=True, exist_ok=True)
+    config = load(a.config)
+    tables = published_tables(a.study)
+    law_tables = tables + ([pd.read_csv(a.fidelity)] if a.fidelity.exists() else [])
+    law = fit_law(law_tables, config)
+    write_text_atomically(a.out / "cost_law.json", json.dumps(law, indent=1) + "\n")
+    print(f"cost law on {law['cases']} published cases: CPU s = exp({law['ln_a']:.3f}) N^{law['b_particles']:.3f} "
+          f"S^{law['b_steps']:.3f}, residual SD {law['residual_sd']:.3f} (ln, within sessions)")
+    world_path = a.out / "world.joblib"
+    if not world_path.exists():
+        published = pd.concat(tables, ignore_index=True).drop_duplicates("case_id")
+        published = published[published["preset"].astype(str) == "default"]
+        published = calibrated_noise(published, config.get("noise_calibration", []))
+        t0 = time.time()
+        world = replay.build_world(published, config, law)
+        print(f"truth fitted in {time.time() - t0:.0f} s: {world.notes[0]}")
+        with atomic_path(world_path) as tmp:
+            joblib.dump(world, tmp)
+    paths_file = a.out / "paths.csv"
+    done = pd.read_csv(paths_file) if paths_file.exists() else pd.DataFrame(columns=["design", "seed"])
+    have = set(zip(done["design"], done["seed"]))
+    designs = [d for d in replay.DESIGNS if d["name"] in a.designs]
+    todo = [(d, s, a.max_cases, a.max_cpu_h) for d in designs for s in range(a.seeds) if (d["name"], s) not in have]
+    print(f"{len(todo)} replays to run ({len(have)} reused), {a.jobs} processes")
+    t0 = time.time()
+    parts = [done] if len(done) else []
+    with ProcessPoolExecutor(a.jobs, initializer=_init, initargs=(str(world_path),)) as pool:
+        for i, path in enumerate(pool.map(_one, todo), 1):
+            parts.append(path)
+            r = path.iloc[-1]
+            print(f"[{i}/{len(todo)} {time.time() - t0:.0f} s] {r['design']} seed {r['seed']}: {len(path)} steps "
+                  f"to {r['n']} cases, replay CPU {r['replay_cpu_s']:.0f} s", flush=True)
+            if i % 4 == 0 or i == len(todo):
+                with atomic_path(paths_file) as tmp:
+                    pd.concat(parts, ignore_index=True).to_csv(tmp, index=False)
+    paths = pd.concat(parts, ignore_index=True) if parts else done
+    with atomic_path(paths_file) as tmp:
+        paths.to_csv(tmp, index=False)
+    all_stops, all_honesty = [], []
+    for tol in a.tolerances:
+        st = replay.stops(paths, {t: tol for t in replay.TARGETS}).assign(tolerance=tol)
+        all_stops.append(st)
+        all_honesty.append(replay.honesty(st).assign(tolerance=tol))
+    stops = pd.concat(all_stops, ignore_index=True)
+    hon = pd.concat(all_honesty, ignore_index=True)
+    for name, frame in (("stops.csv", stops), ("honesty.csv", hon)):
+        with atomic_path(a.out / name) as tmp:
+            frame.to_csv(tmp, index=False)
+    with pd.option_context("display.width", 200, "display.max_columns", 20):
+        print(hon.round(3).to_string(index=False))
+    from spreadmap.convergence.replay_plots import plot_replay
+
+    plot_replay(paths, hon, a.out / "replay.png")
+    meta = {"command": "benchmarks/replay.py " + " ".join(argv if argv is not None else sys.argv[1:]),
+            "seeds": a.seeds, "max_cases": a.max_cases, "designs": a.designs, "tolerances": a.tolerances,
+            "replays": int(paths.groupby(["design", "seed"]).ngroups),
+            "replay_cpu_s_total": float(paths.groupby(["design", "seed"])["replay_cpu_s"].first().sum())
+            if "replay_cpu_s" in paths else None}
+    write_text_atomically(a.out / "meta.json", json.dumps(meta, indent=1) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
