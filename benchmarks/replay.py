@@ -53,6 +53,35 @@ def _one(args):
     return path.assign(replay_cpu_s=time.process_time() - t0)
 
 
+def summary_markdown(paths: pd.DataFrame, hon: pd.DataFrame, margin: float, law: dict) -> str:
+    """The replay's tables as markdown (written by this script; docs/replay/README.md reads them)."""
+    lines = ["# The loop's replay: numbers", "",
+             f"Written by `benchmarks/replay.py`. {paths.groupby(['design', 'seed']).ngroups} replays; "
+             f"margin {margin:g} calibrated on the first half of the seeds, judged on the second half; "
+             f"cost law CPU s = exp({law['ln_a']:.3f}) N^{law['b_particles']:.3f} S^{law['b_steps']:.3f} "
+             f"(N spheres, S steps planned; {law['cases']} published cases, residual SD {law['residual_sd']:.2f} in ln).",
+             "", "## Stops per tolerance (MFR and PD): honest = the true map error (RMS, worst grid) within the "
+             "tolerance at the stop; 95 % Clopper-Pearson interval", "",
+             "| rule | tolerance | design | stops / replays | honest [95 % CI] | cases at stop, median (p90) | "
+             "modelled CPU h at stop, median (p90) |", "|---|---|---|---|---|---|---|"]
+    for r in hon.sort_values(["rule", "tolerance", "design"]).itertuples():
+        honest = (f"{r.honest_share:.2f} [{r.honest_low:.2f}, {r.honest_high:.2f}]" if r.stops else "-")
+        cases = f"{r.cases_median:.0f} ({r.cases_p90:.0f})" if r.stops else "-"
+        cpu = f"{r.cpu_h_median:.2f} ({r.cpu_h_p90:.2f})" if r.stops else "-"
+        lines.append(f"| {r.rule} | {r.tolerance:g} | {r.design} | {r.stops} / {r.replays} | {honest} | {cases} | {cpu} |")
+    p = paths.assign(worst=paths[["mfr_true", "pd_true"]].max(axis=1))
+    g = p.groupby(["design", "n"]).agg(cpu=("cpu_h_modelled", "median"), med=("worst", "median"),
+                                        q90=("worst", lambda x: x.quantile(0.9)),
+                                        mfr=("mfr_true", "median"), pd_=("pd_true", "median"),
+                                        est=("mfr_estimate", "median")).reset_index()
+    lines += ["", "## The true map error per design and size (worst of MFR and PD, worst grid; over the seeds)", "",
+              "| design | cases | modelled CPU h (median) | true error median | true error p90 | MFR median | PD median | MFR estimate median |",
+              "|---|---|---|---|---|---|---|---|"]
+    for r in g.itertuples():
+        lines.append(f"| {r.design} | {r.n} | {r.cpu:.2f} | {r.med:.4f} | {r.q90:.4f} | {r.mfr:.4f} | {r.pd_:.4f} | {r.est:.4f} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", type=Path, required=True)
@@ -63,7 +92,9 @@ def main(argv=None) -> int:
     ap.add_argument("--max-cases", type=int, default=160)
     ap.add_argument("--max-cpu-h", type=float, default=None)
     ap.add_argument("--designs", nargs="*", default=[d["name"] for d in replay.DESIGNS])
-    ap.add_argument("--tolerances", nargs="*", type=float, default=[0.010, 0.012, 0.015, 0.02])
+    ap.add_argument("--tolerances", nargs="*", type=float, default=[0.010, 0.012, 0.015, 0.02, 0.025])
+    ap.add_argument("--calibrate-on", nargs="*", type=float, default=[0.015, 0.02],
+                    help="tolerances the margin is calibrated at (those the shipped budget can reach)")
     ap.add_argument("--jobs", type=int, default=2)
     a = ap.parse_args(argv)
     import joblib
@@ -106,23 +137,34 @@ def main(argv=None) -> int:
     paths = pd.concat(parts, ignore_index=True) if parts else done
     with atomic_path(paths_file) as tmp:
         paths.to_csv(tmp, index=False)
+    # the margin: calibrated on the first half of the seeds, judged on the other half
+    half = a.seeds // 2
+    calib, test = paths[paths["seed"] < half], paths[paths["seed"] >= half]
+    margin = replay.calibrate_margin(calib, a.calibrate_on)
+    print(f"margin calibrated on seeds 0-{half - 1} at tolerances {a.calibrate_on}: {margin} (the smallest that "
+          "makes 90 % of their stops, pooled over the designs, honest)")
     all_stops, all_honesty = [], []
-    for tol in a.tolerances:
-        st = replay.stops(paths, {t: tol for t in replay.TARGETS}).assign(tolerance=tol)
-        all_stops.append(st)
-        all_honesty.append(replay.honesty(st).assign(tolerance=tol))
+    for rule, m, frame in (("bare estimate", 1.0, paths), (f"x{margin:g} (held-out seeds)", margin, test)):
+        if not np.isfinite(m):
+            continue
+        for tol in a.tolerances:
+            st = replay.stops(frame, {t: tol for t in replay.TARGETS}, margin=m).assign(tolerance=tol, rule=rule, margin=m)
+            all_stops.append(st)
+            all_honesty.append(replay.honesty(st).assign(tolerance=tol, rule=rule, margin=m))
     stops = pd.concat(all_stops, ignore_index=True)
     hon = pd.concat(all_honesty, ignore_index=True)
     for name, frame in (("stops.csv", stops), ("honesty.csv", hon)):
         with atomic_path(a.out / name) as tmp:
             frame.to_csv(tmp, index=False)
-    with pd.option_context("display.width", 200, "display.max_columns", 20):
+    with pd.option_context("display.width", 220, "display.max_columns", 20, "display.max_rows", 200):
         print(hon.round(3).to_string(index=False))
     from spreadmap.convergence.replay_plots import plot_replay
 
-    plot_replay(paths, hon, a.out / "replay.png")
+    plot_replay(paths, hon, a.out / "replay")
+    write_text_atomically(a.out / "summary.md", summary_markdown(paths, hon, margin, law))
     meta = {"command": "benchmarks/replay.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-            "seeds": a.seeds, "max_cases": a.max_cases, "designs": a.designs, "tolerances": a.tolerances,
+            "margin": margin, "margin_calibrated_on_seeds": f"0-{half - 1}",
+            "margin_calibrated_at_tolerances": a.calibrate_on, "seeds": a.seeds, "max_cases": a.max_cases, "designs": a.designs, "tolerances": a.tolerances,
             "replays": int(paths.groupby(["design", "seed"]).ngroups),
             "replay_cpu_s_total": float(paths.groupby(["design", "seed"])["replay_cpu_s"].first().sum())
             if "replay_cpu_s" in paths else None}

@@ -957,3 +957,8 @@ def test_replay_stops_and_honesty_on_a_constructed_path():
     assert (replay.stops(paths, {"mfr": 0.0125, "pd": 0.0125}, hold_for=2)["n"] == 64).all()
     never = replay.stops(paths, {"mfr": 0.001, "pd": 0.001})
     assert not never["stopped"].any() and replay.honesty(never).iloc[0]["stops"] == 0
+    # a margin of 1.5 holds 0.018 against 0.0125 at 48 cases: the stops move to 64, all within
+    assert (replay.stops(paths, {"mfr": 0.0125, "pd": 0.0125}, margin=1.5)["n"] == 64).all()
+    # the smallest margin on the grid that makes 95 % of the stops honest: 1.05 (0.0126 > 0.0125)
+    assert replay.calibrate_margin(paths, [0.0125], share=0.95) == 1.05
+    assert replay.calibrate_margin(paths, [0.0125], share=0.9) == 1.0

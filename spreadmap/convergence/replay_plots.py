@@ -28,7 +28,7 @@ def plot_replay(paths: pd.DataFrame, honesty: pd.DataFrame, out: Path | str, shi
     a.plot(lim, lim, "k-", lw=0.8, label="estimate = true")
     a.set(xscale="log", yscale="log", xlim=lim, ylim=lim, xlabel="true map error (RMS, worst grid)",
           ylabel="the rule's estimate (max of CV net of noise, posterior)",
-          title=f"(a) estimate vs truth, every step of {p['design'].iloc[0]}")
+          title=f"(a) estimate vs truth, every step, {p['design'].iloc[0]}")
     a.legend(fontsize=8)
     # (b) true MFR error against modelled CPU, median and 10-90 % over seeds, per design
     b = ax[0, 1]
@@ -40,26 +40,32 @@ def plot_replay(paths: pd.DataFrame, honesty: pd.DataFrame, out: Path | str, shi
         b.plot(g["cpu"], g["med"], "-o", ms=3, color=colours[d], label=d)
         b.fill_between(g["cpu"], g["lo"], g["hi"], color=colours[d], alpha=0.15)
     b.set(xlabel="modelled CPU hours of the cases", ylabel="true MFR map error (RMS, worst grid)",
-          yscale="log", title="(b) the map's true error per CPU hour (median, 10-90 %)")
+          yscale="log", title="(b) true MFR error per CPU hour (median, 10-90 %)")
     b.legend(fontsize=8)
-    # (c) honesty per tolerance
+    # (c) honesty per tolerance: the bare estimate (dashed) and with the margin (solid, held-out seeds)
     c = ax[1, 0]
-    for d in designs:
-        h = honesty[honesty["design"] == d].sort_values("tolerance")
-        c.errorbar(h["tolerance"], h["honest_share"], yerr=[h["honest_share"] - h["honest_low"],
-                                                            h["honest_high"] - h["honest_share"]],
-                   fmt="-o", ms=4, capsize=3, color=colours[d], label=d)
+    rules = list(dict.fromkeys(honesty["rule"])) if "rule" in honesty else [None]
+    for k, rule in enumerate(rules):
+        for j, d in enumerate(designs):
+            if not k and len(rules) > 1 and d != shipped:
+                continue  # the bare estimate: the shipped design's only, to keep the panel readable
+            h = honesty[(honesty["design"] == d) & ((honesty["rule"] == rule) if rule else True)].sort_values("tolerance")
+            x = h["tolerance"] * (1 + 0.012 * (j - len(designs) / 2))  # a little apart
+            c.errorbar(x, h["honest_share"], yerr=[h["honest_share"] - h["honest_low"],
+                                                   h["honest_high"] - h["honest_share"]],
+                       fmt="-o" if k else "--s", ms=3, capsize=2, color=colours[d], alpha=1 if k else 0.45,
+                       label=f"{d}, {rule}" if rule else d)
     c.axhline(0.9, color="k", ls="--", lw=0.8, label="goal 90 %")
     c.set(xlabel="tolerance (MFR and PD)", ylabel="share of stops with true error within tolerance",
-          ylim=(0, 1.05), title="(c) the rule's honesty (95 % CI)")
-    c.legend(fontsize=8)
+          ylim=(0, 1.05), title="(c) honest stops (95 % CI); faint: no margin")
+    c.legend(fontsize=6, ncol=1)
     # (d) CPU at the stop per tolerance
     e = ax[1, 1]
     for d in designs:
-        h = honesty[honesty["design"] == d].sort_values("tolerance")
+        h = honesty[(honesty["design"] == d) & ((honesty["rule"] == rules[-1]) if rules[-1] else True)].sort_values("tolerance")
         e.plot(h["tolerance"], h["cpu_h_median"], "-o", ms=4, color=colours[d], label=d)
         e.fill_between(h["tolerance"], h["cpu_h_median"], h["cpu_h_p90"], color=colours[d], alpha=0.12)
     e.set(xlabel="tolerance (MFR and PD)", ylabel="modelled CPU hours at the stop",
-          title="(d) cost of a stop (median; band to the 90th percentile)")
+          title="(d) CPU at the stop, with the margin (median to p90)")
     e.legend(fontsize=8)
     return save_figure(fig, out, honesty)
