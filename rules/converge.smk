@@ -19,7 +19,7 @@ checkpoint converge_step:
         lds_seed=SWEEPS.get("lds", {}).get("seed", 42),
         noise_calibration=config.get("noise_calibration", []),
         surrogate=config.get("surrogate", {}),
-        scene_config={k: config[k] for k in ("preset", "presets", "material", "scene", "metrics", "converge")},
+        scene_config={k: config.get(k) for k in ("preset", "presets", "material", "scene", "metrics", "converge")},
     wildcard_constraints:
         n=r"\d+",
     log:
