@@ -20,7 +20,9 @@ SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
     "convergence": {"sampling_study": {"seeds": 2, "k_max": 4}},
     "maps": {"sobol_n": 128, "machine": {"n_h": 3, "n_v": 3}},
     # 10 cases: the surrogate's 3-fold validation needs 8 usable, and a smoke case may be flagged
-    "converge": {"start": 4, "batch": 2, "k_consecutive": 3, "budget": 10},
+    # (and a tolerance no smoke run reaches: the loop runs to its budget)
+    "converge": {"start": 4, "batch": 2, "k_consecutive": 3, "budget": 10,
+                 "map_error": {"tolerance": {"mfr": 1e-4, "pd": 1e-4}}},
 })
 MAIN_FIGURES = ["path", "surrogate_parity", "surrogate_r2_vs_neurons", "surrogate_learning_curve", "machine_map",
                 "powder_band_map", "powder_cluster_map", "parallel_coordinates", "regime_overlay",
@@ -60,6 +62,10 @@ def test_main_job_writes_every_analysis_output(finished_run):
     assert meta["n_train"] + meta["n_test"] == meta["n_usable"] > 0
     predictions = (wf / "surrogate" / "predictions.csv").read_text()
     assert {"mfr_model_sd", "mfr_run_sd"} <= set(predictions.splitlines()[0].split(","))
+    # the decisions and the explorer page come with the main job
+    recs = (wf / "decisions" / "recommendations.csv").read_text()
+    assert "demo" in recs and (wf / "decisions" / "probability.png").stat().st_size > 0
+    assert "<title>spreadmap explorer</title>" in (wf / "decisions" / "explorer.html").read_text(errors="replace")[:2000]
 
 
 def test_vtk_written_when_asked(finished_run):
