@@ -11,16 +11,15 @@ those in ``stop_on`` block the stop, by default the map's own error alone):
    taken: (a) cross-validation net of the noise, sqrt(max(CV RMSE^2 - noise^2, 0)) on the LDS
    share (criterion 1's numbers), the error measured at cases the model has not seen; (b) the
    model's posterior: the RMS posterior SD of the map over each map grid (the design box, the
-   machine plane, the powder plane), the worst grid. The larger of the two, times ``margin``, is
-   held against the tolerance: an estimate that is right on average crosses the tolerance first
-   where it happens to read low, so a stop on the bare estimate is within tolerance only about
-   half the time; the margin (calibrated on the replay, docs/replay) makes the stop an upper
-   bound. (a) checks that the model is not more sure
+   machine plane, the powder plane), the worst grid. (a) checks that the model is not more sure
    than its held-out errors allow; (b) reads the error where the maps are read and does not
    scatter with the noise of a few held-out cases. Both are in target units, so a cheap, noisy
    preset is judged by the same standard as a precise one: its noise is subtracted in (a) and
-   carried by the GP in (b). A replay against a known truth (``replay``, docs/replay) measures
-   how often a stop called here has a true error within the tolerance.
+   carried by the GP in (b). The larger of the two, times ``margin``, is held against the
+   tolerance: an estimate that is right on average crosses the tolerance first where it happens
+   to read low, so a stop on the bare estimate is within tolerance only about half the time; the
+   margin, calibrated on a replay against a known truth (``replay``, docs/replay), makes the stop
+   an upper bound.
 1. ``cv_rmse`` -- the model's K-fold cross-validated RMSE against the cases at or below
    ``factor`` x the noise SD.  *Why*: it is the error of the map at points the model has not
    seen, measured, not assumed.  Against noisy observations it can never fall below the noise
@@ -349,7 +348,8 @@ def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("m
         per["ci"][t] = {k: {kk: float(vv) for kk, vv in v.items()} for k, v in cis.items()}
         per["ci"][t]["ratio"] = float(max(v["ratio"] for v in cis.values()))
     for c in CRITERIA:
-        per[c] = {t: v for t, v in per[c].items() if np.isfinite(v["ratio"])}  # map_error: targets with a tolerance
+        if c == "map_error":  # only the targets given a tolerance
+            per[c] = {t: v for t, v in per[c].items() if np.isfinite(v["ratio"])}
         if not per[c]:
             out[c] = None
             continue

@@ -54,11 +54,10 @@ FitFunction = Callable[[np.ndarray, np.ndarray, "np.ndarray | None"], MapModel]
 class SurrogateMapModel:
     """A fitted ``surrogate.models`` model (GP or MLP ensemble) behind the map-model interface."""
 
-    def __init__(self, model):
+    def __init__(self, model, X_train: np.ndarray):
         self.model = model
         self.kind = model.kind
-        X = getattr(model, "train_X_", None)
-        self.noise_sd = float(np.sqrt(np.mean(model.noise_sd(X) ** 2))) if X is not None else float("nan")
+        self.noise_sd = float(np.sqrt(np.mean(model.noise_sd(np.asarray(X_train, float)) ** 2)))
 
     def predict(self, X, return_std: bool = False):
         mean, sd = self.model.latent(np.asarray(X, float))
@@ -132,9 +131,7 @@ def make_map_fit(surrogate_cfg: Mapping | None = None, final: bool = False) -> F
             sd = np.asarray(noise_sd, float)
             if sd.shape != y.shape or not np.all(np.isfinite(sd)) or np.any(sd < 0):
                 raise ValueError("noise_sd must be finite, >= 0 and one per case")
-        model = make_model(kind, cfg, final=final).fit(X, y, sd)
-        model.train_X_ = X
-        return SurrogateMapModel(model)
+        return SurrogateMapModel(make_model(kind, cfg, final=final).fit(X, y, sd), X)
 
     return fit
 

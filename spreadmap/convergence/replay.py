@@ -36,6 +36,7 @@ import pandas as pd
 
 from ..design import NAMES
 from ..sampling import halton
+from ..scene import precision_target
 from . import map_criteria
 from .cost import PlannedCost
 from .model import make_map_fit
@@ -44,17 +45,18 @@ from .stepper import step
 TARGETS = ("mfr", "pd")
 
 
-def passed_spheres(X: np.ndarray, mfr: np.ndarray, preset: Mapping, counting_c: float) -> np.ndarray:
-    """Spheres a case's window measures: the preset's precision target, at least the spheres of
-    its shortest window and at most those of its longest (MFR x h/d x width x window x 6/pi)."""
+def passed_spheres(X: np.ndarray, mfr: np.ndarray, preset: Mapping, config: Mapping) -> np.ndarray:
+    """Spheres a case's window measures: the preset's precision target (``scene.precision_target``),
+    at least the spheres of its shortest window and at most those of its longest
+    (MFR x h/d x width x window x 6/pi)."""
     X = np.asarray(X, float)
     hd = X[:, 2] / X[:, 1]
     per_d = np.asarray(mfr, float) * hd * float(preset["width_d"]) * 6.0 / math.pi
     lo = per_d * float(preset["window_d"])
-    if preset.get("target_cv") is None:
+    target = precision_target(preset, config)
+    if target is None:
         return lo
     hi = per_d * float(preset.get("window_max_d") or preset["window_d"])
-    target = math.ceil((counting_c / float(preset["target_cv"])) ** 2)
     return np.clip(target, lo, np.maximum(hi, lo))
 
 
@@ -76,10 +78,9 @@ class World:
         X = np.asarray(X, float)
         sd = {t: np.asarray(self.noise[t].run_sd(X), float) for t in TARGETS}
         if preset != "default":
-            c = float(self.config["metrics"]["counting_noise_c"])
             mfr = self.true_map(X)["mfr"]
-            ratio = np.sqrt(passed_spheres(X, mfr, self.config["presets"]["default"], c)
-                            / passed_spheres(X, mfr, self.config["presets"][preset], c))
+            ratio = np.sqrt(passed_spheres(X, mfr, self.config["presets"]["default"], self.config)
+                            / passed_spheres(X, mfr, self.config["presets"][preset], self.config))
             sd = {t: s * ratio for t, s in sd.items()}
         return sd
 
