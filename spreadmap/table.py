@@ -1,7 +1,7 @@
 """The results table: one row per case (parameters, MFR, PD, regime, flags, the reason a case did
 not finish (with its log's verdict), diagnostics, preset, wall time and peak memory from
-Snakemake's benchmark, then the case's noise estimate and its layer quality), and the run
-summary built from it."""
+Snakemake's benchmark, then the case's noise estimate and its layer quality, then its floor and
+its effective gap), and the run summary built from it."""
 from __future__ import annotations
 
 import json
@@ -12,11 +12,16 @@ import pandas as pd
 
 from .files import atomic_path
 from .metrics import NEW_COLUMNS
+from .substrate import effective_gap_um
 
 FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
                  "mfr", "pd", "regime", "flagged", "flag_reason", "reason"]
 # after every other column (added later than the rest): noise estimate and layer quality
 LAST_COLUMNS = list(NEW_COLUMNS)
+# last of all, where the cases' metrics name their floor (spreadmap.substrate): the floor, a rough
+# substrate's jitter, and the gap measured over it: h on a flat floor, h + the substrate's mean
+# hollow depth on a rough one (README, "The model": two gaps)
+FLOOR_COLUMNS = ["substrate", "substrate_jitter", "h_eff_um", "h_eff_over_d"]
 
 
 def flagged(table: pd.DataFrame) -> np.ndarray:
@@ -56,8 +61,21 @@ def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFr
     table = pd.DataFrame(rows)
     if table.empty:
         return pd.DataFrame(columns=FIRST_COLUMNS)
-    last = [c for c in LAST_COLUMNS if c in table.columns]
+    table = with_effective_gap(table)
+    last = [c for c in LAST_COLUMNS + FLOOR_COLUMNS if c in table.columns]
     return table[FIRST_COLUMNS + [c for c in table.columns if c not in FIRST_COLUMNS + last] + last]
+
+
+def with_effective_gap(table: pd.DataFrame) -> pd.DataFrame:
+    """The table with h_eff_um and h_eff_over_d (spreadmap.substrate.effective_gap_um) where its
+    rows name their floor (a `substrate` column; NaN in a row whose floor is unknown); as it is
+    where they do not (tables of metrics from before the floor was recorded)."""
+    if "substrate" not in table.columns:
+        return table
+    jitter = table["substrate_jitter"] if "substrate_jitter" in table.columns else np.nan
+    h_eff = [effective_gap_um(h, d, kind, j) for h, d, kind, j in
+             zip(table["h_um"], table["d_um"], table["substrate"], np.broadcast_to(jitter, len(table)))]
+    return table.assign(h_eff_um=h_eff, h_eff_over_d=np.asarray(h_eff, float) / table["d_um"].to_numpy(float))
 
 
 def write_table(table: pd.DataFrame, path: Path | str) -> None:

@@ -328,6 +328,40 @@ def test_a_rough_substrate_below_z0_is_not_powder():
     assert sunk["thickness_ratio"] == pytest.approx(base["thickness_ratio"] - 0.25 * base["coverage"] / 2, rel=3e-3)
 
 
+def test_the_table_names_each_cases_floor_and_its_effective_gap(tmp_path):
+    """case_metrics carries the floor from the raw record's params (a record from before the floor
+    was recorded ran on the scene's default, flat); the table builder adds the effective gap: h on
+    the flat floor, h + (1/6 + jitter/4) d on the rough one (spreadmap.substrate); the older columns
+    keep their places and the floor's come last."""
+    import json
+
+    from spreadmap.table import FIRST_COLUMNS, FLOOR_COLUMNS, LAST_COLUMNS, build_table
+
+    old, flat, rough = raw_record(), raw_record(), raw_record()
+    flat["params"]["substrate"], flat["params"]["substrate_jitter"] = "flat", 0.5
+    rough["params"]["substrate"], rough["params"]["substrate_jitter"] = "rough", 0.5
+    rows = [case_metrics(raw, RULES, BOUNDS, SETTINGS) for raw in (old, flat, rough)]
+    assert [r["substrate"] for r in rows] == ["flat", "flat", "rough"]
+    assert math.isnan(rows[0]["substrate_jitter"]) and math.isnan(rows[1]["substrate_jitter"])  # a jitter on rough only
+    assert rows[2]["substrate_jitter"] == 0.5
+    files = []
+    for i, row in enumerate(rows):
+        files.append(tmp_path / f"m{i}.json")
+        files[-1].write_text(json.dumps(row))
+    table = build_table(files, [tmp_path / "none.tsv"] * 3, [{"sweep": "t", "index": i} for i in range(3)])
+    assert list(table.columns[:len(FIRST_COLUMNS)]) == FIRST_COLUMNS
+    assert list(table.columns[-len(FLOOR_COLUMNS):]) == FLOOR_COLUMNS
+    assert list(table.columns[-len(FLOOR_COLUMNS) - len(LAST_COLUMNS):-len(FLOOR_COLUMNS)]) == LAST_COLUMNS
+    assert table["h_eff_um"].tolist() == pytest.approx([60.0, 60.0, 60.0 + 30.0 * 7 / 24])  # d = 30 um: + 8.75 um
+    assert table["h_eff_over_d"].tolist() == pytest.approx([2.0, 2.0, 2.0 + 7 / 24])
+    # a table of metrics that do not name their floor (published before it was recorded) is as it was
+    unnamed = [{k: v for k, v in r.items() if not k.startswith("substrate")} for r in rows]
+    for f, row in zip(files, unnamed):
+        f.write_text(json.dumps(row))
+    table = build_table(files, [tmp_path / "none.tsv"] * 3, [{"sweep": "t", "index": i} for i in range(3)])
+    assert not set(FLOOR_COLUMNS) & set(table.columns)
+
+
 def test_within_case_noise_from_the_behind_series():
     raw = raw_record(layers=1)
     rng = np.random.default_rng(8)

@@ -97,6 +97,10 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         "case_id": p["case_id"], "preset": p.get("preset", ""),
         **p["point"],
         "seed": p["seed"], "status": raw["status"], "reason": raw.get("reason", ""),
+        # the floor (the scene's defaults where a record predates them: flat, jitter 0.5); the
+        # jitter of a rough substrate only
+        "substrate": p.get("substrate", "flat"),
+        "substrate_jitter": p.get("substrate_jitter", 0.5) if p.get("substrate") == "rough" else math.nan,
         "mfr": math.nan, "pd": math.nan, "pd_cv": math.nan, "regime": "",
         "n_particles": raw.get("n_particles", p.get("n_particles")),
         "time_step": raw.get("time_step", p["time_step"]),
