@@ -13,6 +13,7 @@ from spreadmap.sampling import chosen_points
 from spreadmap.render import template_sha256
 from spreadmap.scene import UnsafeTimeStep, scene_parameters
 from spreadmap.study_cases import loop_labels, planned_cases
+from spreadmap.substrate import floor_label
 
 try:
     spreadmap_config.validate(config)
@@ -26,6 +27,7 @@ SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list 
 RANGES = config.get("ranges")
 SCENE_SHA256 = template_sha256()
 SWEEPS = config.get("sweeps") or {}
+FLOOR = floor_label(config)  # the floor the cases are spread on, named on every map, table and report
 
 
 def add_case(point, preset=None, seed=None):

@@ -15,6 +15,7 @@ rule convergence:
         tolerance=CONV.get("tolerance", 0.005),
         floors=CONV.get("floors"),
         window=CONV.get("window", 3),
+        floor=FLOOR,
     log:
         "logs/convergence.log",
     localrule: True

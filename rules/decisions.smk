@@ -13,6 +13,7 @@ rule decide:
     params:
         decisions=DECISIONS,
         support=MAPS.get("support", {}),
+        floor=FLOOR,
     log:
         "logs/decisions.log",
     localrule: True
@@ -34,6 +35,7 @@ rule explorer:
     params:
         decisions=DECISIONS,
         support=MAPS.get("support", {}),
+        floor=FLOOR,
     log:
         "logs/explorer.log",
     localrule: True

@@ -8,6 +8,7 @@ rule run_summary:
         text="results/summary.txt",
     params:
         regime=config["regime"],
+        floor=FLOOR,
     log:
         "logs/summary.log",
     localrule: True
@@ -26,6 +27,7 @@ rule sweeps_summary:
         text="results/sweeps_summary.txt",
     params:
         regime=config["regime"],
+        floor=FLOOR,
     log:
         "logs/sweeps_summary.log",
     localrule: True

@@ -16,6 +16,7 @@ rule surrogate:
         surrogate=config.get("surrogate", {}),
         ranges=RANGES,
         noise_calibration=config.get("noise_calibration", []),
+        floor=FLOOR,
     log:
         "logs/surrogate.log",
     localrule: True

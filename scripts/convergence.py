@@ -36,8 +36,9 @@ summary["lds_case_by_case"] = stable
 summary["note"] = ("partitions: converged at the first N where all five statistics of MFR and PD change by less "
                    "than the tolerance from the previous partition; case by case: see lds_case_by_case")
 Path(sm.output.summary).write_text(json.dumps(summary, indent=1, default=str))
-plots.plot_distributions(pd.concat(long, ignore_index=True), out / "distributions", TARGETS)
+plots.plot_distributions(pd.concat(long, ignore_index=True), out / "distributions", TARGETS, floor=p.floor)
 sweeps_stats = {name: conv for name, conv in verdicts.items()}
 sweeps_stats["lds case by case"] = running
-plots.plot_statistics(sweeps_stats, out / "statistics", TARGETS, tolerance=p.tolerance, floors=p.floors)
+plots.plot_statistics(sweeps_stats, out / "statistics", TARGETS, tolerance=p.tolerance, floors=p.floors,
+                      floor=p.floor)
 print(json.dumps(summary, indent=1, default=str))

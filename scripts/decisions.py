@@ -15,8 +15,8 @@ dec = decision_config(sm.params.decisions)
 support = map_config({"support": sm.params.support})["support"]
 model = load_model(sm.input.model)
 table, grids = recommendations(model, dec, support)
-decision_figure(grids, table, powders_from_config(dec), dec, support, sm.output.figure)
-write_text_atomically(sm.output.table, table.to_csv(index=False))
+decision_figure(grids, table, powders_from_config(dec), dec, support, sm.output.figure, sm.params.floor)
+write_text_atomically(sm.output.table, table.assign(floor=sm.params.floor).to_csv(index=False))
 for powder, rows in table.groupby("powder", sort=False):
     print(f"{powder}:")
     for note in rows["note"]:

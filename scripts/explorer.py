@@ -11,6 +11,6 @@ sm = snakemake  # noqa: F821
 dec = decision_config(sm.params.decisions)
 support = map_config({"support": sm.params.support})["support"]
 model = load_model(sm.input.model)
-data = write_explorer(model, dec, support, sm.output.html, sm.output.csv)
+data = write_explorer(model, dec, support, sm.output.html, sm.output.csv, floor=sm.params.floor)
 print(f"explorer: {len(data['f'])} x {len(data['d'])} slider positions (f, d), {len(data['h'])} x {len(data['v'])} "
       f"(h, v) cells, {len(data['targets'])} targets, {len(model.train_X)} cases -> {sm.output.html}")

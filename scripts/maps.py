@@ -20,7 +20,7 @@ cases = calibrated_noise(pd.read_csv(sm.input.table), p.noise_calibration)  # co
 usable = maps.usable_cases(cases)
 y = cfg["machine"]["y"]
 auto_y, scores = maps.choose_machine_y(usable, model.targets)
-scores.to_csv(sm.output.y_choice, index=False)  # each candidate's information beyond MFR and its r with MFR
+scores.assign(floor=p.floor).to_csv(sm.output.y_choice, index=False)  # each candidate's information beyond MFR and its r with MFR
 if y == "auto":
     y = auto_y
     print(f"machine map y axis: {y}" + (f" (scores beyond MFR:\n{scores.to_string()})" if len(scores) else
@@ -32,15 +32,20 @@ y_note = (None if chosen is None else f"{y} against MFR over the {int(chosen['n'
           f"{chosen['r_with_mfr']:.2f} [{chosen['r_low']:.2f}, {chosen['r_high']:.2f}] (95 %)")
 machine = {k: v for k, v in cfg["machine"].items() if k != "y"}
 support = cfg["support"]
-maps.machine_map(model, out / "machine_map", y=y, ranges=p.ranges, support=support, y_note=y_note, **machine)
-maps.powder_band_map(model, out / "powder_band_map", y=y, ranges=p.ranges, support=support, **cfg["powder"])
-maps.powder_cluster_map(model, out / "powder_cluster_map", y=y, ranges=p.ranges, support=support, **cfg["powder"])
-maps.parallel_coordinates(cases, out / "parallel_coordinates", mfr_min=cfg["best_mfr_min"], ranges=p.ranges)
-maps.regime_overlay(cases, model, out / "regime_overlay", p.regime, ranges=p.ranges, support=support,
+floor = p.floor  # the floor the cases ran on, named on every map and in its CSV
+maps.machine_map(model, out / "machine_map", y=y, ranges=p.ranges, support=support, y_note=y_note, floor=floor,
+                 **machine)
+maps.powder_band_map(model, out / "powder_band_map", y=y, ranges=p.ranges, support=support, floor=floor,
+                     **cfg["powder"])
+maps.powder_cluster_map(model, out / "powder_cluster_map", y=y, ranges=p.ranges, support=support, floor=floor,
+                        **cfg["powder"])
+maps.parallel_coordinates(cases, out / "parallel_coordinates", mfr_min=cfg["best_mfr_min"], ranges=p.ranges,
+                          floor=floor)
+maps.regime_overlay(cases, model, out / "regime_overlay", p.regime, ranges=p.ranges, support=support, floor=floor,
                     **cfg["regime_plane"])
 ranking = sensitivity.sensitivity(model, list(model.targets), n=cfg["sobol_n"], draws=cfg["sobol_draws"],
                                   ranges=p.ranges)
-ranking.to_csv(sm.output.ranking, index=False)
-sensitivity.plot_ranking(ranking, out / "sensitivity_ranking")
+ranking.assign(floor=floor).to_csv(sm.output.ranking, index=False)
+sensitivity.plot_ranking(ranking, out / "sensitivity_ranking", floor)
 with pd.option_context("display.width", 250, "display.max_columns", None):
     print(ranking.round(3).to_string())

@@ -12,7 +12,7 @@ log_to(snakemake)  # noqa: F821
 sm = snakemake  # noqa: F821
 # a set is named by its table: results/tables/<set>.csv, or results/<set>/table.csv (the converge run)
 tables = {(Path(p).parent.name if Path(p).stem == "table" else Path(p).stem): pd.read_csv(p) for p in sm.input.tables}
-summary = run_summary(tables, sm.params.regime)
+summary = run_summary(tables, sm.params.regime, sm.params.floor)
 Path(sm.output.json).write_text(json.dumps(summary, indent=1))
 text = summary_text(summary)
 Path(sm.output.text).write_text(text)

@@ -15,7 +15,7 @@ sm = snakemake  # noqa: F821
 table = calibrated_noise(pd.read_csv(sm.input.table), sm.params.noise_calibration)
 result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table, ranges=sm.params.ranges)
 save_model(result.model, sm.output.model)
-plot_all(result, Path(sm.output.model).parent, prefix="surrogate")
+plot_all(result, Path(sm.output.model).parent, prefix="surrogate", floor=sm.params.floor)
 with pd.option_context("display.width", 250, "display.max_columns", None):
     print(result.validation.round(4).to_string())
     print(result.study_summary.round(4).to_string())

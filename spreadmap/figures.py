@@ -1,5 +1,7 @@
 """Saving figures: every figure as PNG (for eyes and reports) and PDF (vector, for papers), with
-the numbers behind it as CSV beside it."""
+the numbers behind it as CSV beside it; a figure of DEM results (or of a model of them) names
+the floor they were measured on (spreadmap.substrate.floor_label) above its title and in a
+`floor` column of its CSV."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -20,11 +22,21 @@ def new_figure(width: float, height: float) -> Figure:
     return fig
 
 
-def save_figure(fig, path_stem, data: pd.DataFrame) -> dict[str, Path]:
+def floor_note(fig, floor: str) -> None:
+    """Write the floor (and the gap it implies) as a line above everything else on the figure."""
+    fig.text(0.5, 1.0, floor, ha="center", va="bottom", fontsize=9, color="0.15")
+
+
+def save_figure(fig, path_stem, data: pd.DataFrame, floor: str | None = None) -> dict[str, Path]:
     """Save ``fig`` as ``<path_stem>.png`` and ``.pdf`` and ``data`` as ``<path_stem>.csv``.
 
-    Parent directories are created; the figure is closed. Returns ``{"png", "pdf", "csv"}``.
+    With ``floor`` (spreadmap.substrate.floor_label) the figure names it above its title and the
+    CSV gets it as a last column, ``floor``. Parent directories are created; the figure is closed.
+    Returns ``{"png", "pdf", "csv"}``.
     """
+    if floor:
+        floor_note(fig, floor)
+        data = pd.DataFrame(data).assign(floor=floor)
     stem = Path(path_stem)
     if stem.suffix.lower() in (".png", ".pdf", ".csv"):
         stem = stem.with_suffix("")

@@ -1,7 +1,8 @@
 """docs/study/summary.md: the study's questions answered from its published files, each number
 with its interval, and "not yet" where a part has not run.
 
-Reads (all optional): progress.csv, converge/stopped.json (or, while the loop runs, its last
+Reads (all optional): config.yaml (the floor the cases ran on, named under the title),
+progress.csv, converge/stopped.json (or, while the loop runs, its last
 converge/steps/step_*.json), convergence/summary.json,
 surrogate/surrogate_metrics.csv, surrogate/surrogate_r2_vs_neurons.csv,
 maps/sensitivity_ranking_table.csv, surrogate/model.joblib (the trends), heldout/score.json and
@@ -20,6 +21,7 @@ from scipy.stats import qmc
 
 from spreadmap.convergence.stepper import step_number
 from spreadmap.design import NAMES, bounds
+from spreadmap.substrate import floor_label
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
 
@@ -368,4 +370,6 @@ def summary_markdown(study: Path | str, ranges: dict | None = None) -> str:
     study = Path(study)
     sections = [_cases(study), _convergence(study), _surrogate(study), _heldout(study), _ranking(study),
                 _trends(study, ranges), _regimes(study)]
-    return "# The study: what the data say\n\n" + "\n\n".join("\n".join(s) for s in sections) + "\n"
+    config = study / "config.yaml"
+    floor = f"Floor: {floor_label(_read_yaml(config))}.\n\n" if config.exists() else ""
+    return "# The study: what the data say\n\n" + floor + "\n\n".join("\n".join(s) for s in sections) + "\n"

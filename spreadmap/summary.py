@@ -58,14 +58,16 @@ def set_summary(table: pd.DataFrame, rules: dict | None = None) -> dict:
     }
 
 
-def run_summary(tables: dict[str, pd.DataFrame], rules: dict | None = None) -> dict:
+def run_summary(tables: dict[str, pd.DataFrame], rules: dict | None = None, floor: str | None = None) -> dict:
     """Per set and over the distinct cases; with `rules` (the config's `regime`), the rule is said
-    and labels that differ from it are counted (stale_regime_labels)."""
+    and labels that differ from it are counted (stale_regime_labels); with `floor`
+    (spreadmap.substrate.floor_label), the floor the cases ran on is named."""
     sets = {name: set_summary(t, rules) for name, t in tables.items()}
     filled = [t for t in tables.values() if len(t)]
     unique = pd.concat(filled, ignore_index=True) if filled else pd.DataFrame()
     unique = unique.drop_duplicates("case_id") if len(unique) else unique
     return {"sets": sets, "unique_cases": int(len(unique)),
+            **({"floor": floor} if floor else {}),
             **({"regime_rule": rule_text(rules)} if rules is not None else {}),
             "all": set_summary(unique, rules) if len(unique)
             else set_summary(pd.DataFrame(columns=["status", "flagged", "regime"]), rules)}
@@ -73,6 +75,8 @@ def run_summary(tables: dict[str, pd.DataFrame], rules: dict | None = None) -> d
 
 def summary_text(summary: dict) -> str:
     lines = [f"spreadmap run summary: {summary['unique_cases']} distinct cases"]
+    if "floor" in summary:
+        lines.append(f"  floor: {summary['floor']}")
     if "regime_rule" in summary:
         lines.append(f"  regime rule: {summary['regime_rule']}")
     for name, s in {**summary["sets"], "all (distinct)": summary["all"]}.items():

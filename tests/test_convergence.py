@@ -7,7 +7,9 @@ import pandas as pd
 import pytest
 from scipy import stats
 
+from figure_text import pdf_text
 from spreadmap import convergence as cv
+from spreadmap.substrate import floor_label
 
 TOL = cv.DEFAULT_TOLERANCE
 
@@ -316,7 +318,8 @@ def test_plots_write_png_pdf_csv(tmp_path):
                          cp.partition_values(lat, "lattice", partition_col="k")],
                         ignore_index=True)
     assert set(long_df.loc[long_df["sweep"] == "lattice", "partition"]) == {16, 81, 256}
-    written = [cp.plot_distributions(long_df, tmp_path / "dist")]
+    floor = floor_label({"scene": {"substrate": {"kind": "rough", "jitter": 0.5}}})
+    written = [cp.plot_distributions(long_df, tmp_path / "dist", floor=floor)]
     conv = {"lds": cv.convergence_table(lds, partitions=[50, 100, 200, 400]),
             "lattice": cv.convergence_table(lat, partition_col="k")}
     written.append(cp.plot_statistics(conv, tmp_path / "sub" / "stats"))
@@ -326,6 +329,8 @@ def test_plots_write_png_pdf_csv(tmp_path):
     for paths in written:
         for ext in ("png", "pdf", "csv"):
             assert paths[ext].exists() and paths[ext].stat().st_size > 0, paths[ext]
+    assert "(previous layer, jitter 0.5 R)" in pdf_text(written[0]["pdf"])  # given its floor, a figure names it
+    assert set(pd.read_csv(written[0]["csv"])["floor"]) == {floor} and "floor" not in pd.read_csv(written[1]["csv"])
     stats_csv = pd.read_csv(tmp_path / "sub" / "stats.csv")
     assert {"sweep", "n", "target", "statistic", "value", "band_low", "band_high"} <= set(
         stats_csv.columns)

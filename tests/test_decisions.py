@@ -11,15 +11,19 @@ confidence p sits where c = lo + S Phi^-1(p): written out below, not taken from 
 import copy
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 from scipy.stats import norm
 
 from conftest import ROOT
+from figure_text import pdf_text
 from spreadmap import config as spreadmap_config
 from spreadmap.decisions import DecisionError, decision_config, recommendations
 from spreadmap.decisions.figure import decision_figure
+from spreadmap.decisions.explorer import write_explorer
 from spreadmap.decisions.feasibility import powders_from_config
+from spreadmap.substrate import floor_label
 
 SIGMA, NOISE = 0.01, 0.02            # model SD and a run's noise SD of coverage
 LOW, HIGH = np.array([0.15, 10.0, 55.0, 5.0]), np.array([0.45, 50.0, 75.0, 15.0])
@@ -153,11 +157,23 @@ def test_bounds_no_setting_meets_are_reported_with_the_best_probability():
     assert "no setting meets the bounds with P >= 0.9" in table["note"].iloc[0]
 
 
-def test_the_figure_is_written(tmp_path):
+def test_the_figure_is_written_and_names_its_floor(tmp_path):
     dec = settings(powders={"one": {"f": 0.3, "d_um": 20}, "none": {"f": 0.45, "d_um": 40}})
     table, grids = recommendations(KnownModel(), dec, SUPPORT)
-    paths = decision_figure(grids, table, powders_from_config(dec), dec, SUPPORT, tmp_path / "probability")
+    floor = floor_label({"scene": {"substrate": {"kind": "rough", "jitter": 0.5}}})
+    paths = decision_figure(grids, table, powders_from_config(dec), dec, SUPPORT, tmp_path / "probability", floor)
     assert all(p.stat().st_size > 1000 for p in paths.values())
+    assert "(previous layer, jitter 0.5 R); gap h nominal, from its tops" in pdf_text(paths["pdf"])
+    assert set(pd.read_csv(paths["csv"])["floor"]) == {floor}
+
+
+def test_the_explorer_page_and_its_table_name_the_floor(tmp_path):
+    dec = settings(explorer={"n_f": 2, "n_d": 2, "n_h": 3, "n_v": 3})
+    floor = floor_label({"scene": {"substrate": {"kind": "flat"}}})
+    write_explorer(KnownModel(), dec, SUPPORT, tmp_path / "explorer.html", tmp_path / "explorer.csv", floor=floor)
+    page = (tmp_path / "explorer.html").read_text()
+    assert f'<p id="floor"><b>{floor}</b></p>' in page
+    assert set(pd.read_csv(tmp_path / "explorer.csv")["floor"]) == {floor}
 
 
 @pytest.mark.parametrize("change, key", [

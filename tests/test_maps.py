@@ -5,14 +5,17 @@ import pytest
 from scipy.stats import norm
 
 import synthetic_cases as syn
+from figure_text import pdf_text
 from spreadmap import maps
 from spreadmap.design import NAMES, bounds
 from spreadmap.maps import grids
 from spreadmap.surrogate.models import GPModel
+from spreadmap.substrate import floor_label
 from spreadmap.surrogate.saved_model import SurrogateModel
 
 LOW, HIGH = bounds()
 SUPPORT = {"max_distance": 1.5, "max_sd_ratio": 1.0}
+ROUGH = floor_label({"scene": {"substrate": {"kind": "rough", "jitter": 0.5}}})
 
 
 def surrogate(table) -> SurrogateModel:
@@ -42,6 +45,26 @@ def files_ok(res):
     for p in res.paths.values():
         assert p.stat().st_size > 0, p
     return pd.read_csv(res.paths["csv"])
+
+
+def names_the_floor(paths, floor=ROUGH):
+    """The figure (its PDF) says which floor and which gap, and so does every row of its CSV."""
+    shown = pdf_text(paths["pdf"])
+    assert "(previous layer, jitter 0.5 R); gap h nominal, from its tops" in shown, shown[-400:]
+    assert set(pd.read_csv(paths["csv"])["floor"]) == {floor}
+
+
+def test_every_map_names_its_floor(model, cases, tmp_path):
+    """The maps drawn for the rough floor say so above their titles and in their CSVs; without a
+    floor (a caller that does not know it) a map says nothing of one."""
+    drawn = [maps.machine_map(model, tmp_path / "machine", n_h=3, n_v=3, support=SUPPORT, floor=ROUGH),
+             maps.powder_band_map(model, tmp_path / "band", n_d=5, n_f=2, draws=20, support=SUPPORT, floor=ROUGH),
+             maps.powder_cluster_map(model, tmp_path / "cluster", n_d=3, n_f=3, support=SUPPORT, floor=ROUGH),
+             maps.parallel_coordinates(cases, tmp_path / "pc", floor=ROUGH)]
+    for res in drawn:
+        names_the_floor(res.paths)
+    plain = maps.machine_map(model, tmp_path / "plain", n_h=3, n_v=3, support=SUPPORT)
+    assert "floor" not in files_ok(plain).columns and "previous layer" not in pdf_text(plain.paths["pdf"])
 
 
 def test_region_beyond_the_data_is_masked(half_model, tmp_path):
@@ -133,13 +156,14 @@ def test_regime_overlay_counts_planted_regimes(tmp_path):
     targets = ("mfr", "coverage", "thickness_ratio")
     models = {t: GPModel().fit(X, ok[t].to_numpy(float), ok[f"{t}_sd"].to_numpy(float)) for t in targets}
     m = SurrogateModel(targets, models, X, LOW, HIGH)
-    res = maps.regime_overlay(df, m, tmp_path / "reg", rules, n_d=12, n_h=8, support=SUPPORT)
+    res = maps.regime_overlay(df, m, tmp_path / "reg", rules, n_d=12, n_h=8, support=SUPPORT, floor=ROUGH)
     counts = res.info["counts"]
     planted = ok["regime"].value_counts()
     assert counts["dem"].to_dict() == {r: int(planted.get(r, 0)) for r in maps.REGIMES}
     assert res.info["excluded"] == 1
     assert counts["both"].sum() >= 0.85 * counts["dem"].sum()
     files_ok(res)
+    names_the_floor(res.paths)
 
 
 def test_regime_overlay_needs_the_targets_of_the_rule(model, cases, tmp_path):

@@ -1,12 +1,15 @@
 """Sensitivity ranking: Sobol indices against analytic values (a known function, and a GP of noisy
 samples of one), band widths against exact ones, ranks only where the draws separate."""
 import numpy as np
+import pandas as pd
 import pytest
 
 import synthetic_cases as syn
+from figure_text import pdf_text
 from spreadmap import sensitivity
 from spreadmap.design import NAMES, bounds, to_physical
 from spreadmap.sensitivity import FunctionDraws
+from spreadmap.substrate import floor_label
 from spreadmap.surrogate.models import GPModel
 from spreadmap.surrogate.saved_model import SurrogateModel
 
@@ -117,7 +120,9 @@ def test_ranking_table_and_plot(tmp_path):
     for t in ("mfr", "pd"):
         top = table[table["target"] == t].iloc[0]
         assert top["parameter"] == "d_um" and top["rank_ST"] == "1"
-    paths = sensitivity.plot_ranking(table, tmp_path / "rank")
+    floor = floor_label({"scene": {"substrate": {"kind": "flat"}}})
+    paths = sensitivity.plot_ranking(table, tmp_path / "rank", floor)
     assert all(p.stat().st_size > 0 for p in paths.values())
+    assert "gap h from the" in pdf_text(paths["pdf"]) and set(pd.read_csv(paths["csv"])["floor"]) == {floor}
     with pytest.raises(ValueError, match="power of 2"):
         sensitivity.sobol_draws(model, ["mfr"], n=100)

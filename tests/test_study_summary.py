@@ -106,6 +106,16 @@ def test_a_loop_still_running_is_reported_from_its_last_step(tmp_path):
     assert "after 48 cases" not in text
 
 
+def test_the_summary_names_the_floor_of_the_studys_config(tmp_path):
+    """The study's config (config.yaml beside its files) names the floor under the title; a study
+    folder without one says nothing of a floor."""
+    assert "Floor:" not in summary_markdown(tmp_path)
+    (tmp_path / "config.yaml").write_text("scene:\n  substrate:\n    kind: rough\n    jitter: 0.25\n")
+    lines = summary_markdown(tmp_path).splitlines()
+    assert lines[2] == ("Floor: rough floor (previous layer, jitter 0.25 R); gap h nominal, from its tops "
+                        "(effective gap h + 0.23 d).")
+
+
 def test_flag_causes_are_counted_by_their_cause_with_numbers_hidden():
     from spreadmap.study_summary import _flag_causes
 

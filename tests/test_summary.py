@@ -20,6 +20,17 @@ def test_counts_and_reasons_said_once():
     assert "a:" not in text
 
 
+def test_the_summary_names_its_floor():
+    from spreadmap.substrate import floor_label
+
+    table = pd.DataFrame({"case_id": ["a"], "status": ["ok"], "regime": ["normal"], "flagged": [False], "flag_reason": [""]})
+    floor = floor_label({"scene": {"substrate": {"kind": "rough", "jitter": 0.5}}})
+    summary = run_summary({"lds": table}, floor=floor)
+    assert summary["floor"] == floor
+    assert summary_text(summary).splitlines()[1] == f"  floor: {floor}"
+    assert "floor" not in run_summary({"lds": table})  # not known: not said
+
+
 def test_sets_without_cases():
     empty = pd.DataFrame(columns=["case_id", "status", "flagged", "regime", "flag_reason"])
     summary = run_summary({"points": empty})

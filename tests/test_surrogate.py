@@ -229,12 +229,18 @@ def test_mlp_draws_the_maps_when_configured():
 
 
 def test_plots_written(result, tmp_path):
+    from figure_text import pdf_text
+    from spreadmap.substrate import floor_label
     from spreadmap.surrogate.plots import plot_all
 
-    files = plot_all(result, tmp_path)
+    floor = floor_label({"scene": {"substrate": {"kind": "rough", "jitter": 0.5}}})
+    files = plot_all(result, tmp_path, floor=floor)
     for name in ("parity", "r2_vs_neurons", "learning_curve"):
         for suffix in ("png", "pdf", "csv"):
             assert files[name][suffix].stat().st_size > 0
+        assert "(previous layer, jitter 0.5 R)" in pdf_text(files[name]["pdf"])  # the figures name their floor
+        table = pd.read_csv(files[name]["csv"])  # (an empty learning curve: the column, no rows)
+        assert table.columns[-1] == "floor" and set(table["floor"]) <= {floor}
     assert (tmp_path / "surrogate_metrics.csv").is_file()
 
 

@@ -18,6 +18,7 @@ from spreadmap.decisions import decision_config, powders_from_config, recommenda
 from spreadmap.decisions.explorer import write_explorer  # noqa: E402
 from spreadmap.decisions.figure import decision_figure  # noqa: E402
 from spreadmap.files import write_text_atomically  # noqa: E402
+from spreadmap.substrate import floor_label  # noqa: E402
 from spreadmap.surrogate import load_model  # noqa: E402
 from spreadmap.surrogate.settings import map_config  # noqa: E402
 
@@ -37,14 +38,15 @@ def main() -> None:
     dec = decision_config(config["decisions"])
     support = map_config(config["maps"])["support"]
     model = load_model(ROOT / "docs" / "study" / "surrogate" / "model.joblib")
+    floor = floor_label(spreadmap_config.load(ROOT / "docs" / "study" / "config.yaml"))  # the floor the model's cases ran on
     table, grids = recommendations(model, dec, support)
-    decision_figure(grids, table, powders_from_config(dec), dec, support, OUT / "probability")
-    write_text_atomically(OUT / "recommendations.csv", table.to_csv(index=False))
+    decision_figure(grids, table, powders_from_config(dec), dec, support, OUT / "probability", floor)
+    write_text_atomically(OUT / "recommendations.csv", table.assign(floor=floor).to_csv(index=False))
     for note in table["powder"] + ": " + table["note"]:
         print(note)
     with tempfile.TemporaryDirectory() as tmp:
         html = Path(tmp) / "explorer.html"
-        write_explorer(model, dec, support, html)
+        write_explorer(model, dec, support, html, floor=floor)
         screenshot(html, OUT / "explorer.png")
 
 

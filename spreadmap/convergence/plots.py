@@ -68,7 +68,7 @@ def partition_values(table: pd.DataFrame, sweep: str, targets: Sequence[str] = c
 
 
 def plot_distributions(long_df: pd.DataFrame, path_stem,
-                       targets: Sequence[str] = cv.DEFAULT_TARGETS) -> dict[str, Path]:
+                       targets: Sequence[str] = cv.DEFAULT_TARGETS, floor: str | None = None) -> dict[str, Path]:
     """Box plots of each target per partition, one column per sweep (e.g. LDS | lattice).
 
     ``long_df``: columns sweep, partition, target, value (``partition_values`` of each sweep,
@@ -90,7 +90,7 @@ def plot_distributions(long_df: pd.DataFrame, path_stem,
             ax.set_xlabel(N_LABEL)
             ax.set_ylabel(_label(t))
             ax.tick_params(axis="x", labelrotation=45)
-    return save_figure(fig, path_stem, long_df)
+    return save_figure(fig, path_stem, long_df, floor)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -117,7 +117,7 @@ def _stats_long(name: str, df: pd.DataFrame, targets, tolerance, floors) -> pd.D
 def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
                     targets: Sequence[str] = cv.DEFAULT_TARGETS,
                     tolerance: float = cv.DEFAULT_TOLERANCE,
-                    floors: Mapping[str, float] | None = None) -> dict[str, Path]:
+                    floors: Mapping[str, float] | None = None, floor: str | None = None) -> dict[str, Path]:
     """Each statistic against N (log x) for every sweep, with the tolerance band of each sweep.
 
     ``sweeps``: name -> statistics frame, either a ``convergence_table`` (column ``partition``)
@@ -163,7 +163,7 @@ def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
         axes[0, 0].set_xticks(ticks, [str(n) for n in ticks])  # shared x: every panel's ticks
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 3), fontsize="small")
-    return save_figure(fig, path_stem, long_df)
+    return save_figure(fig, path_stem, long_df, floor)
 
 
 def _partition_sizes(sweeps: Mapping[str, pd.DataFrame]) -> list[int]:

@@ -18,6 +18,7 @@ Python model at that point, not an interpolation.
 """
 from __future__ import annotations
 
+import html
 import json
 
 import numpy as np
@@ -219,6 +220,7 @@ PAGE = """<!DOCTYPE html>
 td,th{{padding:2px 10px;text-align:right}} th{{border-bottom:1px solid #999}} .note{{color:#555;font-size:13px;max-width:1350px}}</style>
 </head><body>
 <h2>spreadmap explorer: the surrogate's map over (v, h), friction and diameter on the sliders</h2>
+<p id="floor"><b>{floor}</b></p>
 <p class="note">{intro}</p>
 <div id="readout"><b>At <span id="probe-point"></span></b>
 <table><tr><th style="text-align:left">target</th><th>mean</th><th>model SD</th><th>new run SD</th></tr>
@@ -250,12 +252,15 @@ def explorer_html(data: dict, n_cases: int) -> str:
     rows = "\n".join(f'<tr><td style="text-align:left">{data["labels"][t]}</td><td id="mean-{t}"></td>'
                      f'<td id="model-sd-{t}"></td><td id="run-sd-{t}"></td></tr>' for t in data["targets"])
     payload = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
-    return PAGE.format(intro=intro, rows=rows, bounds=data["bounds_text"], plot=plot, data=payload)
+    floor = html.escape(data.get("floor") or "floor not stated")
+    return PAGE.format(floor=floor, intro=intro, rows=rows, bounds=data["bounds_text"], plot=plot, data=payload)
 
 
-def write_explorer(model, dec: dict, support: dict, path, csv=None) -> dict:
-    """Write the page (and, given ``csv``, its numbers as a table); return the page's data."""
-    data = explorer_data(model, dec, support)
+def write_explorer(model, dec: dict, support: dict, path, csv=None, floor: str | None = None) -> dict:
+    """Write the page (and, given ``csv``, its numbers as a table); return the page's data.
+    ``floor``: the floor the model's cases ran on (spreadmap.substrate.floor_label), named on the
+    page and in the table."""
+    data = {**explorer_data(model, dec, support), "floor": floor}
     write_text_atomically(path, explorer_html(data, len(model.train_X)))
     if csv is not None:
         write_text_atomically(csv, explorer_table(data).to_csv(index=False))
@@ -269,4 +274,6 @@ def explorer_table(data: dict) -> pd.DataFrame:
     for t in data["targets"]:
         out[t], out[f"{t}_model_sd"], out[f"{t}_run_sd"] = data["mean"][t], data["model_sd"][t], data["run_sd"][t]
     out["beyond_data"], out["probability"], out["recommended_region"] = data["beyond"], data["probability"], data["region"]
+    if data.get("floor"):
+        out["floor"] = data["floor"]
     return out

@@ -32,9 +32,11 @@ def bounds_text(bounds: dict) -> str:
     return ", ".join(parts)
 
 
-def decision_figure(grids: dict, table: pd.DataFrame, powders, dec: dict, support: dict, stem):
+def decision_figure(grids: dict, table: pd.DataFrame, powders, dec: dict, support: dict, stem,
+                    floor: str | None = None):
     """Draw and save (PNG, PDF, and the grids as CSV) the probability maps with the recommendations.
-    ``grids``: powder name -> ``feasibility`` frame; ``table``: ``recommendations``' table."""
+    ``grids``: powder name -> ``feasibility`` frame; ``table``: ``recommendations``' table; ``floor``:
+    the floor the surrogate's cases were spread on (spreadmap.substrate.floor_label)."""
     n = len(powders)
     cols = min(n, 3)
     rows = -(-n // cols)
@@ -87,4 +89,4 @@ def decision_figure(grids: dict, table: pd.DataFrame, powders, dec: dict, suppor
                  f"{'a new run: mean + noise' if dec['about'] == 'run' else 'the mean function'})\n"
                  f"hatched, never recommended (open marks): {support_rule(support)}", fontsize=9)
     data = pd.concat([g.assign(powder=name) for name, g in grids.items()], ignore_index=True)
-    return save_figure(fig, stem, data)
+    return save_figure(fig, stem, data, floor)

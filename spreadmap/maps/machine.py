@@ -24,12 +24,12 @@ from .style import HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_not
 
 def machine_map(model, stem, y: str = "pd", f: float = 0.45, d_um: float = 45.0, n_h: int = 5, n_v: int = 5,
                 h_values=None, v_values=None, ranges=None, support=None, max_labels: int = 7,
-                y_note: str | None = None) -> MapResult:
+                y_note: str | None = None, floor: str | None = None) -> MapResult:
     support = support or {"max_distance": 1.5, "max_sd_ratio": 1.0}
     h = grids.values(h_values, n_h, "h_um", ranges)
     v = grids.values(v_values, n_v, "v_mm_s", ranges)
     grid = grids.evaluate(model, grids.grid_frame(f=f, d_um=d_um, h_um=h, v_mm_s=v), ["mfr", y], support)
-    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note)
+    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note, floor)
 
 
 # where the noise cross may go (axes fractions of its left end; its note runs ~0.35 to the right)
@@ -46,7 +46,7 @@ def emptiest_corner(ax, xs, ys) -> tuple[float, float]:
     return min(CORNERS, key=count)
 
 
-def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note=None) -> MapResult:
+def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note=None, floor=None) -> MapResult:
     shape = (len(h), len(v))
     X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
     sx, sy = grid["mfr_model_sd"].to_numpy().reshape(shape), grid[f"{y}_model_sd"].to_numpy().reshape(shape)
@@ -110,5 +110,5 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
     title = ax.set_title(f"{beyond}Machine map at f = {fmt(f)}, d = {fmt(d_um)} um: h {fmt(h.min())}-{fmt(h.max())} um, "
                  f"v {fmt(v.min())}-{fmt(v.max())} mm/s", fontsize=10)
     note = support_note(fig, grid["supported"].to_numpy(), support, "settings")
-    paths = save_figure(fig, stem, grid)
+    paths = save_figure(fig, stem, grid, floor)
     return MapResult(paths, grid, {"y": y, "note": note, "title": title.get_text(), "n_unsupported": int((~ok).sum())})

@@ -55,6 +55,7 @@ def parallel_coordinates(
     score: Callable[[pd.DataFrame], np.ndarray] | None = None,
     ranges: dict | None = None,
     n_ticks: int = 5,
+    floor: str | None = None,
 ) -> MapResult:
     """Parallel coordinates of a sample of DEM cases (the converged LDS sample).
 
@@ -128,5 +129,5 @@ def parallel_coordinates(
     cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
         "mfr", "pd"] + [f"{n}_norm" for n in NAMES] + ["mfr_norm", "pd_norm", "best"]
     table = data[cols].reset_index(drop=True)
-    paths = save_figure(fig, path_stem, table)
+    paths = save_figure(fig, path_stem, table, floor)
     return MapResult(paths, table, {"best": best})

@@ -26,7 +26,7 @@ DEFAULT_SUPPORT = {"max_distance": 1.5, "max_sd_ratio": 1.0}
 
 def powder_band_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: float = 6.1, n_d: int = 41,
                     n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
-                    seed: int = 0) -> MapResult:
+                    seed: int = 0, floor: str | None = None) -> MapResult:
     support = support or DEFAULT_SUPPORT
     d = grids.values(d_values, n_d, "d_um", ranges)
     fv = grids.values(f_values, n_f, "f", ranges)
@@ -81,12 +81,13 @@ def powder_band_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: floa
                  f"at h = {fmt(h_um)} um, v = {fmt(v_mm_s)} mm/s", fontsize=11)
     note = support_note(fig, grid["supported"].to_numpy(), support)
     table = grid.merge(effect, on="d_um", how="left")
-    paths = save_figure(fig, stem, table)
+    paths = save_figure(fig, stem, table, floor)
     return MapResult(paths, table, {"note": note, "effect": effect})
 
 
 def powder_cluster_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: float = 6.1, n_d: int = 5,
-                       n_f: int = 7, d_values=None, f_values=None, ranges=None, support=None) -> MapResult:
+                       n_f: int = 7, d_values=None, f_values=None, ranges=None, support=None,
+                       floor: str | None = None) -> MapResult:
     support = support or DEFAULT_SUPPORT
     d = grids.values(d_values, n_d, "d_um", ranges)
     fv = grids.values(f_values, n_f, "f", ranges)
@@ -125,5 +126,5 @@ def powder_cluster_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: f
                  f"v = {fmt(v_mm_s)} mm/s", fontsize=10)
     ax.grid(alpha=0.3)
     note = support_note(fig, grid["supported"].to_numpy(), support)
-    paths = save_figure(fig, stem, grid)
+    paths = save_figure(fig, stem, grid, floor)
     return MapResult(paths, grid, {"note": note})

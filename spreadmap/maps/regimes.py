@@ -40,7 +40,7 @@ def regime_counts(dem: np.ndarray, model: np.ndarray) -> pd.DataFrame:
 
 def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
                    f: float = 0.3, v_mm_s: float = 10.0, n_d: int = 60, n_h: int = 40, ranges=None,
-                   support=None) -> MapResult:
+                   support=None, floor: str | None = None) -> MapResult:
     support = support or {"max_distance": 1.5, "max_sd_ratio": 1.0}
     known = cases["regime"].isin(REGIMES).to_numpy()
     data = cases.loc[known].copy()
@@ -107,6 +107,6 @@ def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
     cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
         "h_over_d", "mfr", "pd", "regime", "p_normal", "p_jamming", "p_short_feed", "regime_pred"]
     table = data[[c for c in cols if c in data]].reset_index(drop=True)
-    paths = save_figure(fig, stem, table)
+    paths = save_figure(fig, stem, table, floor)
     return MapResult(paths, table, {"counts": counts, "excluded": int((~known).sum()), "agree": agree,
                                     "plane": plane, "note": note})

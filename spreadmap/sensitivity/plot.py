@@ -8,7 +8,7 @@ from ..design import BY_NAME, NAMES
 from ..figures import new_figure, save_figure
 
 
-def plot_ranking(table, stem) -> dict:
+def plot_ranking(table, stem, floor: str | None = None) -> dict:
     targets = list(dict.fromkeys(table["target"]))
     fig = new_figure(5.4 * len(targets), 4.8)
     axes = np.atleast_1d(fig.subplots(1, len(targets)))
@@ -35,4 +35,4 @@ def plot_ranking(table, stem) -> dict:
         h1, l1 = ax.get_legend_handles_labels()
         h2, l2 = ax2.get_legend_handles_labels()
         ax.legend(h1 + h2, l1 + l2, loc="upper right", fontsize=7.5)
-    return save_figure(fig, stem, table)
+    return save_figure(fig, stem, table, floor)

@@ -33,7 +33,7 @@ def _numbers(v: pd.Series) -> str:
             f"R$^2$ {v['r2']:.2f} of max {v['r2_max']:.2f} (noise-corrected {v['r2_corrected']:.2f})")
 
 
-def plot_parity(val: pd.DataFrame, oof: pd.DataFrame, stem) -> dict:
+def plot_parity(val: pd.DataFrame, oof: pd.DataFrame, stem, floor: str | None = None) -> dict:
     targets = list(dict.fromkeys(val["target"]))
     fig = new_figure(5.6 * len(targets), 6.0)
     axes = np.atleast_1d(fig.subplots(1, len(targets)))
@@ -66,10 +66,10 @@ def plot_parity(val: pd.DataFrame, oof: pd.DataFrame, stem) -> dict:
         ax.legend(loc="lower right", fontsize=7)
         ax.grid(alpha=0.3)
         tables.append(case.assign(target=t, model=chosen["model"]))
-    return save_figure(fig, stem, pd.concat(tables, ignore_index=True))
+    return save_figure(fig, stem, pd.concat(tables, ignore_index=True), floor)
 
 
-def plot_study(summary: pd.DataFrame, val: pd.DataFrame, stem) -> dict:
+def plot_study(summary: pd.DataFrame, val: pd.DataFrame, stem, floor: str | None = None) -> dict:
     targets = list(dict.fromkeys(summary["target"]))
     fig = new_figure(5.0 * len(targets), 4.6)
     axes = np.atleast_1d(fig.subplots(1, len(targets)))
@@ -96,10 +96,10 @@ def plot_study(summary: pd.DataFrame, val: pd.DataFrame, stem) -> dict:
         ax.set_title(LONG.get(t, t), fontsize=10)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5, loc="lower left")
-    return save_figure(fig, stem, summary)
+    return save_figure(fig, stem, summary, floor)
 
 
-def plot_learning_curve(learning: pd.DataFrame, stem) -> dict:
+def plot_learning_curve(learning: pd.DataFrame, stem, floor: str | None = None) -> dict:
     fig = new_figure(6.4, 4.6)
     ax = fig.subplots()
     if learning.empty:
@@ -117,19 +117,20 @@ def plot_learning_curve(learning: pd.DataFrame, stem) -> dict:
     ax.grid(alpha=0.3)
     if not learning.empty:
         ax.legend(fontsize=7)
-    return save_figure(fig, stem, learning)
+    return save_figure(fig, stem, learning, floor)
 
 
-def plot_all(result, outdir, prefix: str = "surrogate") -> dict:
-    """The three figures and the tables (validation metrics, study, out-of-fold) into outdir."""
+def plot_all(result, outdir, prefix: str = "surrogate", floor: str | None = None) -> dict:
+    """The three figures and the tables (validation metrics, study, out-of-fold) into outdir; with
+    ``floor`` (spreadmap.substrate.floor_label) the figures name the floor the cases ran on."""
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     result.validation.to_csv(outdir / f"{prefix}_metrics.csv", index=False)
     result.study_runs.to_csv(outdir / f"{prefix}_study_runs.csv", index=False)
     return {
-        "parity": plot_parity(result.validation, result.oof, outdir / f"{prefix}_parity"),
-        "r2_vs_neurons": plot_study(result.study_summary, result.validation, outdir / f"{prefix}_r2_vs_neurons"),
-        "learning_curve": plot_learning_curve(result.learning, outdir / f"{prefix}_learning_curve"),
+        "parity": plot_parity(result.validation, result.oof, outdir / f"{prefix}_parity", floor),
+        "r2_vs_neurons": plot_study(result.study_summary, result.validation, outdir / f"{prefix}_r2_vs_neurons", floor),
+        "learning_curve": plot_learning_curve(result.learning, outdir / f"{prefix}_learning_curve", floor),
     }
 
 
