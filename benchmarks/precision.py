@@ -80,6 +80,12 @@ ARMS = {
     "shipped": {"rev": None, "overrides": {}},
     # the pile's standing reserve tried at the corner, where window8's pile ran down: a heap h and
     # 2 h long there (pile_reserve x h^2 / (h + heap)); the shipped 4.7 is the 2 h heap
+    # the deposit frozen 8 d behind the blade once at rest, the substrate behind it removed
+    # (scene.freeze_behind_d; issue 31)
+    "freeze": {"rev": None, "overrides": {"scene": {"freeze_behind_d": 8}}},
+    # the heap left to come to rest before the blade starts: relax up to 2 free-fall times of the
+    # pile instead of 0.5 (it ended on its time cap with spheres at up to 44 mm/s)
+    "rested": {"rev": None, "overrides": {"scene": {"relax_time_factor": 2.0}}},
     "reserve_1h": {"rev": None, "overrides": {"scene": {"pile_reserve": 2.33}}, "points": ["fine_thick_corner"]},
     "reserve_2h": {"rev": None, "overrides": {"scene": {"pile_reserve": 4.67}}, "points": ["fine_thick_corner"]},
 }

@@ -187,4 +187,6 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "steady_span": float(scene.get("steady_span_d", 2.0)) * d,
         "steady_z": float(scene.get("steady_z", 2.0)),
         "counting_noise_c": configured_counting_c(config),
+        "freeze_behind_d": scene.get("freeze_behind_d"),
+        "freeze_speed_ratio": float(scene.get("freeze_speed_ratio", 0.02)),
     }

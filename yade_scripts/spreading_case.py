@@ -82,6 +82,10 @@ PARAMS = {
     "steady_span": 8e-05,
     "steady_z": 2.0,
     "counting_noise_c": 0.45,
+    "timing": False,
+    "freeze_behind_d": None,
+    "freeze_speed_ratio": 0.02,
+    "move_steps_limit": None,
 }
 # --- end of case parameters ---
 
@@ -176,7 +180,7 @@ for yc in (-d, W + d):
 # advances (extend_substrate, from control()); the lattice and its random depths are the same
 # whenever they are laid.
 x_substrate = -tb - 4.0 * d  # behind the blade's start only what the collapsing pile can reach
-substrate = {"positions": [], "radii": [], "rows": [], "x_end": x_substrate}
+substrate = {"positions": [], "radii": [], "rows": [], "x_end": x_substrate, "ids": []}
 if P["substrate"] == "rough":
     import random
     substrate_rng = random.Random(1000003 * int(P["seed"]) + 17)
@@ -209,7 +213,8 @@ def extend_substrate(x_to):
                 centre = (row[1], row[0], zc)
                 if not any((p[0] - centre[0]) ** 2 + (p[1] - centre[1]) ** 2 + (p[2] - zc) ** 2 < (2.0 * R) ** 2
                            for p in nearby):
-                    O.bodies.append(utils.sphere(centre, R, fixed=True, material=frict, mask=SUBSTRATE_MASK))
+                    substrate["ids"].append(
+                        O.bodies.append(utils.sphere(centre, R, fixed=True, material=frict, mask=SUBSTRATE_MASK)))
                     substrate["positions"].append(list(centre))
                     substrate["radii"].append(R)
                 row[1] += d
@@ -229,6 +234,7 @@ if placed != int(P["n_particles"]):
     log("FAILED: makeCloud placed %d of %d spheres in the cloud box (%.0f um high): the cloud is too dense; "
         "lower the config key scene.cloud_fraction" % (placed, P["n_particles"], P["cloud_height"] * 1e6))
     sys.exit(EXIT_FAILED)
+
 sphere_ids = list(cloud.toSimulation(material=frict))
 for i in sphere_ids:
     O.bodies[i].mask = POWDER_MASK
@@ -246,27 +252,33 @@ if P["rolling_resistance"]:
     law.includeMoment = True
     geometry_functors = [Ig2_Sphere_Sphere_ScGeom6D(), Ig2_Box_Sphere_ScGeom6D()]
 
-newton = NewtonIntegrator(gravity=(0, 0, -P["gravity"]), damping=P["settle_damping"])
+newton = NewtonIntegrator(gravity=(0, 0, -P["gravity"]), damping=P["settle_damping"], label="newton")
 O.engines = [
-    ForceResetter(),
-    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()], avoidSelfInteractionMask=AVOID_MASK),
-    InteractionLoop(geometry_functors, [ip2], [law]),
+    ForceResetter(label="reset"),
+    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()], avoidSelfInteractionMask=AVOID_MASK, label="collider"),
+    InteractionLoop(geometry_functors, [ip2], [law], label="interactions"),
     newton,
-    PyRunner(command="watchdog()", iterPeriod=int(P["watchdog_every"])),
-    PyRunner(command="control()", iterPeriod=int(P["control_every"])),
-    PyRunner(command="monitor()", iterPeriod=int(P["monitor_every"])),
-    PyRunner(command="record_overlap()", iterPeriod=int(P["overlap_every"])),
+    PyRunner(command="watchdog()", iterPeriod=int(P["watchdog_every"]), label="watchdog"),
+    PyRunner(command="control()", iterPeriod=int(P["control_every"]), label="control"),
+    PyRunner(command="monitor()", iterPeriod=int(P["monitor_every"]), label="monitor"),
+    PyRunner(command="record_overlap()", iterPeriod=int(P["overlap_every"]), label="record_overlap"),
 ]
+# With `timing` on, YADE times every engine (O.timingEnabled; a few % of overhead): the raw record
+# gets each phase's CPU seconds per engine and its steps and mean sphere count, to see where a
+# sphere-step's cost goes (benchmarks/engine_profile.py). Off in the workflow's cases.
+O.timingEnabled = bool(P.get("timing"))
 
 state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": None,
          "peak_overlap_ratio": 0.0, "rolled_off": 0, "removed_behind_volume": 0.0, "max_speed_seen": 0.0, "status": None, "reason": "",
          "peak_overlap_by_phase": {}, "peak_overlap_free": 0.0, "peak_overlap_wedged": 0.0,
-         "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start}
+         "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start,
+         "phase_cost": {}, "phase_mark": None, "frozen": 0}
 single_particle_ke_bound = 0.5 * mass * P["max_speed"] ** 2
 
 
 def spheres():
     return (O.bodies[i] for i in sphere_ids)
+
 
 
 def blade_rear_x():
@@ -284,6 +296,7 @@ def finish(status, reason=""):
     O.wait() would race with that thread. No runner of this script runs after this, not even later
     in this step: the first reason to end the run is the one recorded."""
     state["status"], state["reason"] = status, reason
+    close_phase_cost()
     state["end"] = end_state()
     for engine in O.engines:
         if isinstance(engine, PyRunner):
@@ -454,7 +467,56 @@ def steady_test(x):
     return n1 > 0 and n2 > 0 and abs(n2 - n1) <= P["steady_z"] * P["counting_noise_c"] * math.sqrt(n1 + n2)
 
 
+def engine_seconds():
+    return {e.label: 1e-9 * e.execTime for e in O.engines if e.label}
+
+
+def close_phase_cost():
+    """The phase now ending: its steps, its mean sphere count (at its start and end) and, with
+    `timing`, each engine's CPU seconds in it."""
+    mark = state["phase_mark"] or {"iter": 0, "spheres": len(sphere_ids), "engines": {}}
+    now = engine_seconds() if P.get("timing") else {}
+    state["phase_cost"][state["phase"]] = {
+        "steps": O.iter - mark["iter"], "spheres": 0.5 * (mark["spheres"] + len(sphere_ids)),
+        "bodies_at_end": len(O.bodies), "interactions_at_end": len(O.interactions),
+        "contacts_at_end": O.interactions.countReal(),
+        "engine_seconds": {k: v - mark["engines"].get(k, 0.0) for k, v in now.items()}}
+    state["phase_mark"] = {"iter": O.iter, "spheres": len(sphere_ids), "engines": now}
+
+
+def freeze_behind(x_rear):
+    """Stop integrating the deposit well behind the blade (freeze_behind_d): a sphere more than
+    that far behind the blade's rear face and slower than freeze_speed_ratio x the blade's speed is
+    frozen where it lies (at rest, no longer dynamic, given the substrate's mask so that the
+    collider pairs it with neither the substrate nor another frozen sphere, its contacts with those
+    erased). It stays a body: an obstacle to any sphere still moving, in every snapshot at its
+    place, in every volume count. Substrate spheres behind every moving powder sphere (by 2 d) then
+    touch nothing that moves: they leave the simulation (their positions stay in the record)."""
+    line = x_rear - P["freeze_behind_d"] * d
+    slow = P["freeze_speed_ratio"] * P["blade_speed"]
+    frozen = [b for b in spheres() if b.dynamic and b.state.pos[0] < line and b.state.vel.norm() < slow]
+    for b in frozen:
+        b.state.vel, b.state.angVel = (0, 0, 0), (0, 0, 0)
+        b.dynamic = False
+        b.mask = SUBSTRATE_MASK
+    for b in frozen:
+        for i in b.intrs():
+            if O.bodies[i.id2 if i.id1 == b.id else i.id1].mask == SUBSTRATE_MASK:
+                O.interactions.erase(i.id1, i.id2)
+    state["frozen"] += len(frozen)
+    if frozen and substrate["ids"]:
+        moving_from = min([b.state.pos[0] for b in spheres() if b.dynamic] or [x_rear]) - 2.0 * d
+        keep = []
+        for sid in substrate["ids"]:
+            if O.bodies[sid].state.pos[0] < moving_from:
+                O.bodies.erase(sid)
+            else:
+                keep.append(sid)
+        substrate["ids"] = keep
+
+
 def start_phase(name):
+    close_phase_cost()
     state["phase_times"][state["phase"] + "_end"] = O.time
     state["phase"], state["phase_start"] = name, O.time
     log("phase %s at t = %.4g s, step %d" % (name, O.time, O.iter))
@@ -489,6 +551,11 @@ def control():
             state["snapshots"]["blade_start"] = snapshot()
     elif phase == "move":
         x = blade_rear_x()
+        if P.get("move_steps_limit") and O.iter - state["phase_mark"]["iter"] >= P["move_steps_limit"]:
+            finish("stopped", "profile: %d steps of the move phase" % P["move_steps_limit"])
+            return
+        if P.get("freeze_behind_d") is not None and O.iter % (10 * int(P["control_every"])) == 0:
+            freeze_behind(x)
         if P["substrate"] == "rough" and x + tb + L + P["substrate_ahead"] * d > substrate["x_end"]:
             extend_substrate(x + tb + L + P["substrate_ahead"] * d + 10.0 * d)
         if "window_start" not in state["snapshots"]:
@@ -572,9 +639,11 @@ raw = {
     "rolled_off_particles": state["rolled_off"] + end["rolled_off"],
     "max_speed_by_phase": state["max_speed_by_phase"],
     "behind_series": state["behind_series"],
+    "phase_cost": state["phase_cost"],
+    "frozen_particles": state["frozen"],
     "snapshots": state["snapshots"],
 }
 write_atomically(out_path, raw)
 log("done: status %s %s; %d steps, %.4g s simulated, %.1f s wall; raw result in %s"
     % (state["status"], state["reason"], raw["steps"], raw["simulated_time"], raw["wall_time"], out_path))
-sys.exit(EXIT_OK if state["status"] == "ok" else EXIT_BLOWN)
+sys.exit(EXIT_OK if state["status"] in ("ok", "stopped") else EXIT_BLOWN)
