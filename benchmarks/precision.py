@@ -323,6 +323,65 @@ def recorded_against_seed(cells: dict, arm: str, target: str, level: float = 0.9
     return 1 / math.sqrt(k), 1 / math.sqrt(k_hi), 1 / math.sqrt(k_lo), dof
 
 
+def paired_shift(arm_rows: list[dict], base_rows: list[dict], target: str) -> dict:
+    """An arm against `shipped` at one point, seed by seed (same packing seeds): the mean
+    difference, its standard error from the paired differences' spread (n - 1 dof) and z."""
+    base = {r["seed"]: r[target] for r in base_rows}
+    diffs = np.array([r[target] - base[r["seed"]] for r in arm_rows if r["seed"] in base])
+    n = len(diffs)
+    if n < 2:
+        return {"n": n, "diff": math.nan, "se": math.nan, "z": math.nan}
+    mean_base = np.mean([base[r["seed"]] for r in arm_rows if r["seed"] in base])
+    se = float(diffs.std(ddof=1) / math.sqrt(n))
+    return {"n": n, "diff": float(diffs.mean()), "rel": float(diffs.mean() / mean_base), "se": se,
+            "z": float(diffs.mean() / se) if se > 0 else math.nan}
+
+
+def against_shipped(by_point: dict, arms: list[str]) -> list[str]:
+    """Each arm against `shipped`, same seeds: per point the paired shift of MFR and PD with its
+    SE, the chi-square of the points' z (k dof: is any shift there at all?) and the CPU ratio
+    (ratio of the points' mean CPU, with a 95 % interval from resampling seeds within points)."""
+    from scipy import stats
+
+    lines = ["## Against shipped, same seeds", ""]
+    for a in arms:
+        points = sorted(p for p, d in by_point.items() if a in d and "shipped" in d)
+        if not points:
+            continue
+        lines += [f"### {a}", "", "| point | seeds | MFR shift (SE) | t | PD shift (SE) | t | CPU s arm / shipped | ratio |",
+                  "|---|---|---|---|---|---|---|---|"]
+        chi = {"mfr": [], "pd": []}
+        for p in points:
+            m, q = (paired_shift(by_point[p][a], by_point[p]["shipped"], t) for t in ("mfr", "pd"))
+            for t, r in (("mfr", m), ("pd", q)):
+                if math.isfinite(r["z"]):  # t with n - 1 dof, as the normal z of the same tail probability
+                    chi[t].append(float(stats.norm.isf(stats.t.sf(abs(r["z"]), r["n"] - 1))) ** 2)
+            ca, cs = (np.mean([r["cpu_time"] for r in by_point[p][x]]) for x in (a, "shipped"))
+            lines.append(f"| {p} | {m['n']} | {m['diff']:+.4f} ({m['se']:.4f}) | {m['z']:+.1f} | "
+                         f"{q['diff']:+.4f} ({q['se']:.4f}) | {q['z']:+.1f} | {ca:.1f} / {cs:.1f} | {ca / cs:.2f} |")
+        rng = np.random.default_rng(0)
+        boot = []
+        for _ in range(2000):
+            ta = sum(np.mean(rng.choice([r["cpu_time"] for r in by_point[p][a]], len(by_point[p][a]))) for p in points)
+            ts = sum(np.mean(rng.choice([r["cpu_time"] for r in by_point[p]["shipped"]], len(by_point[p]["shipped"])))
+                     for p in points)
+            boot.append(ta / ts)
+        total_a = sum(np.mean([r["cpu_time"] for r in by_point[p][a]]) for p in points)
+        total_s = sum(np.mean([r["cpu_time"] for r in by_point[p]["shipped"]]) for p in points)
+        lo, hi = np.percentile(boot, [2.5, 97.5])
+        lines.append("")
+        for t in ("mfr", "pd"):
+            k = len(chi[t])
+            if k:
+                lines.append(f"- **{a}, {t.upper()}**: chi-square over the {k} points = {sum(chi[t]):.1f} ({k} dof, "
+                             f"p = {stats.chi2.sf(sum(chi[t]), k):.3f}; each point's paired t taken as the normal z "
+                             f"of the same tail probability)")
+        lines.append(f"- **{a}, CPU**: the points' mean CPU summed, arm / shipped = {total_a / total_s:.2f} "
+                     f"(95 % interval from resampling seeds {lo:.2f}-{hi:.2f})")
+        lines.append("")
+    return lines
+
+
 def report(rows: list[dict], arms: list[str]) -> str:
     ok = [r for r in rows if r["status"] == "ok" and math.isfinite(r.get("mfr", math.nan))]
     by_point: dict = {}
@@ -404,6 +463,8 @@ def report(rows: list[dict], arms: list[str]) -> str:
                 lines.append(f"| {p} | {target.upper()} | {va.mean():.4f} | {vb.mean():.4f} | "
                              f"{va.mean() - vb.mean():+.4f} | {se:.4f} | {cpu_ratio:.2f} |")
         lines += [""]
+    if "shipped" in arms:
+        lines += against_shipped(by_point, [a for a in arms if a not in ("shipped", "today")])
     cpu = {a: [r["cpu_time"] for r in ok if r["arm"] == a] for a in arms}
     lines += ["## CPU per case", "", "| arm | cases | median CPU s | max CPU s | total CPU h |", "|---|---|---|---|---|"]
     for a in arms:
