@@ -6,7 +6,8 @@
 The loop's last step (converge/steps/step_N.json, after N cases) is decided again from the
 published cases table (cases_converge.csv, in the loop's run order) and the step before it, with
 the stated noise SDs, with the published config's `noise_calibration`, and with that of each
-`--calibration` file (a YAML file with a `noise_calibration` key, e.g. a config.yaml). Prints, per
+`--calibration` file (a YAML file with a `noise_calibration` key, a `noise_model` key, or both, e.g.
+a config.yaml: MFR's and PD's SDs from the fitted law, spreadmap.noise_law.apply). Prints, per
 calibration and target, the CV RMSE, the noise it is held against, the threshold and their ratio
 (below 1: the criterion holds), and whether every criterion holds. The GP is fitted anew each
 time (one restart, as in the loop), so the RMSE differs from the step's own by the fit's noise.
@@ -28,7 +29,7 @@ from spreadmap import config as spreadmap_config  # noqa: E402
 from spreadmap.convergence.cost import PlannedCost  # noqa: E402
 from spreadmap.convergence.model import make_map_fit  # noqa: E402
 from spreadmap.convergence.stepper import step, step_number  # noqa: E402
-from spreadmap.metrics.noise import calibrated_noise  # noqa: E402
+from spreadmap.noise_law.apply import case_noise, check_sections  # noqa: E402
 
 
 def last_two_steps(steps_dir: Path) -> tuple[dict, dict]:
@@ -38,12 +39,15 @@ def last_two_steps(steps_dir: Path) -> tuple[dict, dict]:
     return tuple(json.loads(p.read_text()) for p in paths[-2:])
 
 
-def recheck(table: pd.DataFrame, cfg: dict, last: dict, previous: dict, calibration: list) -> dict:
-    """The last step decided again with the cases' noise SDs calibrated by `calibration`."""
+def recheck(table: pd.DataFrame, cfg: dict, last: dict, previous: dict, calibration: list,
+            noise_model: dict | None = None) -> dict:
+    """The last step decided again with the cases' noise SDs calibrated by `calibration` (and MFR's
+    and PD's from `noise_model`, a fitted law, where given)."""
     n = int(last["n"])
     if len(table) != n:
         raise ValueError(f"the last step is after {n} cases; the cases table has {len(table)} rows")
-    return step(calibrated_noise(table, calibration), n, cfg["converge"], previous,
+    noisy = case_noise(table, noise_model, calibration, cfg["metrics"]["counting_noise_c"])
+    return step(noisy, n, cfg["converge"], previous,
                 fit=make_map_fit(cfg.get("surrogate"), final=True), ranges=cfg["ranges"], maps_cfg=cfg.get("maps", {}),
                 lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["convergence"].get("tolerance", 0.005),
                 floors=cfg["convergence"].get("floors"), cost=PlannedCost.from_config(cfg))
@@ -61,25 +65,30 @@ def cv_lines(name: str, record: dict) -> list[str]:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--published", default=str(Path(__file__).resolve().parents[1] / "docs" / "study"))
-    parser.add_argument("--calibration", nargs="*", default=[], help="YAML files with a noise_calibration key")
+    parser.add_argument("--calibration", nargs="*", default=[],
+                        help="YAML files with a noise_calibration key, a noise_model key or both")
     args = parser.parse_args(argv)
     published = Path(args.published)
     try:
         cfg = spreadmap_config.load(published / "config.yaml")
         table = pd.read_csv(published / "cases_converge.csv")
         previous, last = last_two_steps(published / "converge" / "steps")
-        variants = [("stated SDs", []), (f"{published / 'config.yaml'}", cfg.get("noise_calibration", []))]
+        variants = [("stated SDs", [], None), (f"{published / 'config.yaml'}", cfg.get("noise_calibration", []), None)]
         for path in args.calibration:
-            calibration = (yaml.safe_load(Path(path).read_text()) or {}).get("noise_calibration")
-            if calibration is None:
-                raise ValueError(f"{path}: no noise_calibration key")
-            variants.append((path, spreadmap_config.validate({**cfg, "noise_calibration": calibration})["noise_calibration"]))
+            loaded = yaml.safe_load(Path(path).read_text()) or {}
+            calibration, noise_model = loaded.get("noise_calibration"), loaded.get("noise_model")
+            if calibration is None and noise_model is None:
+                raise ValueError(f"{path}: no noise_calibration key (nor a noise_model)")
+            calibration = spreadmap_config.validate({**cfg, "noise_calibration": calibration or []})["noise_calibration"]
+            check_sections(noise_model, calibration)
+            variants.append((path, calibration, noise_model))
     except (OSError, ValueError, spreadmap_config.ConfigError) as error:
         print(f"recheck_stop: {error}", file=sys.stderr)
         return 2
     print(f"the loop's step after {last['n']} cases (it {'stopped' if last['stop'] else 'went on'}), decided again:")
-    for name, calibration in variants:
-        print("\n".join(cv_lines(f"{name} {calibration}", recheck(table, cfg, last, previous, calibration))))
+    for name, calibration, noise_model in variants:
+        label = f"{name} {calibration}" + (f" noise_model {noise_model}" if noise_model else "")
+        print("\n".join(cv_lines(label, recheck(table, cfg, last, previous, calibration, noise_model))))
     return 0
 
 

@@ -1,0 +1,79 @@
+"""The fitted noise law applied to a results table: each case's MFR and PD noise SD from the law
+(config `noise_model`) in place of the counting law's stated SD, the layer measures' SDs scaled by
+the hand bands (config `noise_calibration`) as before.
+
+Config section (coefficients from tools/fit_noise_model.py, docs/noise):
+
+    noise_model:
+      n_ref: 150            # the law's reference count and h/d
+      h_over_d_ref: 2.0
+      mfr: {rel_sd: ..., n_exponent: ..., h_over_d_exponent: ...}
+      pd: {rel_sd: ..., n_exponent: ..., h_over_d_exponent: ...}
+
+SD = value x rel_sd x (N / n_ref)^n_exponent x ((h/d) / h_over_d_ref)^h_over_d_exponent, with N the
+count the case's own counting law used (`n_passed` for MFR, `n_pd` for PD). Below one sphere's
+worth (a jammed case, an empty box) the SD is the law's at N = 1 in units of one sphere's worth of
+the measure, as the counting law's floor (spreadmap.metrics.noise.counting_sd) is.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ..metrics.noise import NOISE_SD_COLUMNS, calibrated_noise
+from .cells import COUNT
+
+MODEL_TARGETS = tuple(COUNT)  # mfr, pd
+
+
+def check_sections(noise_model: dict | None, noise_calibration: list | None) -> None:
+    """Refuse a band of `noise_calibration` that would scale a target the fitted law sets (a region
+    without `targets` scales every target): the law supersedes the bands for MFR and PD."""
+    if not noise_model:
+        return
+    covered = [t for t in MODEL_TARGETS if t in noise_model]
+    for i, region in enumerate(noise_calibration or []):
+        named = region.get("targets") or [c.removesuffix("_sd") for c in NOISE_SD_COLUMNS]
+        clash = sorted(set(named) & set(covered))
+        if clash:
+            raise ValueError(f"noise_calibration[{i}] scales {clash}, whose noise SDs noise_model sets "
+                             f"(a region without `targets` scales every target): name the layer measures it "
+                             f"scales under `targets`, or remove it")
+
+
+def law_rel_sd(n: np.ndarray, h_over_d: np.ndarray, law: dict, n_ref: float, hd_ref: float) -> np.ndarray:
+    """The law's relative SD at count n and h/d."""
+    return law["rel_sd"] * (n / n_ref) ** law["n_exponent"] * (h_over_d / hd_ref) ** law["h_over_d_exponent"]
+
+
+def modelled_sd(table: pd.DataFrame, target: str, noise_model: dict, counting_c: float) -> np.ndarray:
+    """Per row, the law's noise SD of `target` (NaN where the case has no value). `counting_c` is
+    the c the table's stated SDs were computed with; it is used only where a case's value or count
+    is 0, to read one sphere's worth of the measure off its stated SD."""
+    law = noise_model[target]
+    value = pd.to_numeric(table[target], errors="coerce").to_numpy(float)
+    stated = pd.to_numeric(table[f"{target}_sd"], errors="coerce").to_numpy(float)
+    count_col = COUNT[target]
+    if count_col not in table:
+        raise ValueError(f"noise_model: the table has no `{count_col}` column (the count behind {target}'s noise)")
+    n = pd.to_numeric(table[count_col], errors="coerce").to_numpy(float)
+    h_over_d = (pd.to_numeric(table["h_um"], errors="coerce") / pd.to_numeric(table["d_um"], errors="coerce")).to_numpy(float)
+    n_eff = np.maximum(n, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        per_sphere = np.where((n > 0) & (value > 0), value / n, stated / (counting_c * np.sqrt(n_eff)))
+    rel = law_rel_sd(n_eff, h_over_d, law, float(noise_model.get("n_ref", 150.0)), float(noise_model.get("h_over_d_ref", 2.0)))
+    return np.abs(per_sphere) * n_eff * rel
+
+
+def case_noise(table: pd.DataFrame, noise_model: dict | None, noise_calibration: list | None,
+               counting_c: float = 0.37) -> pd.DataFrame:
+    """A copy of a results table whose noise SDs are those every analysis should weigh the cases by:
+    MFR's and PD's from the fitted law where `noise_model` gives one, the others (and all of them
+    without a law) the stated SDs scaled by `noise_calibration`'s bands. The values are left as
+    they are."""
+    check_sections(noise_model, noise_calibration)
+    out = calibrated_noise(table, noise_calibration)
+    for target in MODEL_TARGETS:
+        if noise_model and target in noise_model and f"{target}_sd" in out and not out.empty:
+            out[f"{target}_sd"] = modelled_sd(out, target, noise_model, counting_c)
+    return out
