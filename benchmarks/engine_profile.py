@@ -5,7 +5,9 @@ case, at a costly corner of the design space beside cheaper points.
 Each case is the workflow's own scene (spreadmap.scene.scene_parameters, rendered from
 yade_scripts/spreading_case.py) with `timing` on, stopped after ``--move-steps`` steps of the move
 phase (the settle and relax phases run whole), each YADE single-threaded, ``--workers`` at once.
-Prints per case and phase: steps, mean spheres, CPU us per sphere-step, and each engine's share;
+Prints per case and phase: steps, mean spheres, bodies, interactions and contacts at its end, the
+seconds YADE's timers gave its engines (wall-clock time of this single-threaded process: CPU time on
+an idle core), us per sphere-step, and each engine's share;
 ``--json PATH`` writes the same numbers.
 
     .venv/bin/python benchmarks/engine_profile.py                      # corner, normal, thin at default
@@ -54,7 +56,7 @@ def phase_rows(phase_cost: dict) -> list[dict]:
         engines = cost.get("engine_seconds", {})
         total = sum(engines.values())
         sphere_steps = cost["steps"] * cost["spheres"]
-        rows.append({"phase": phase, "steps": cost["steps"], "spheres": cost["spheres"], "cpu_s": total,
+        rows.append({"phase": phase, "steps": cost["steps"], "spheres": cost["spheres"], "timed_s": total,
                      "bodies": cost.get("bodies_at_end"), "interactions": cost.get("interactions_at_end"),
                      "contacts": cost.get("contacts_at_end"),
                      "us_per_sphere_step": 1e6 * total / sphere_steps if sphere_steps else float("nan"),
@@ -104,11 +106,11 @@ def main(argv=None) -> int:
         print(f"\n{res['point']} {POINTS[res['point']]} [{res['arm']}] at {args.preset}: {res['n_particles']} spheres, "
               f"CPU {res['result']['cpu_time']:.1f} s, {res['result']['outcome']} / {res['status']}")
         engines = sorted({k for r in rows for k in r["shares"]})
-        print(f"  {'phase':8} {'steps':>8} {'spheres':>8} {'bodies':>7} {'intrs':>7} {'contacts':>8} {'cpu_s':>8} {'us/sph-step':>11}  "
+        print(f"  {'phase':8} {'steps':>8} {'spheres':>8} {'bodies':>7} {'intrs':>7} {'contacts':>8} {'timed_s':>8} {'us/sph-step':>11}  "
               + " ".join(f"{e[:12]:>12}" for e in engines))
         for r in rows:
             print(f"  {r['phase']:8} {r['steps']:8d} {r['spheres']:8.0f} {r['bodies'] or 0:7d} {r['interactions'] or 0:7d} "
-                  f"{r['contacts'] or 0:8d} {r['cpu_s']:8.1f} {r['us_per_sphere_step']:11.3f}  "
+                  f"{r['contacts'] or 0:8d} {r['timed_s']:8.1f} {r['us_per_sphere_step']:11.3f}  "
                   + " ".join(f"{100 * r['shares'].get(e, 0):11.1f}%" for e in engines))
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=1))

@@ -433,7 +433,7 @@ def report(rows: list[dict], arms: list[str]) -> str:
                              f"{ratio:.2f} (95 % interval {lo:.2f}-{hi:.2f}, {dof} dof)")
         lines += [""]
         for a in arms:
-            if a == "today":
+            if a == "today" or "today" not in arms:
                 continue
             with_arm = {p: d for p, d in complete.items() if a in d}
             if not with_arm:
