@@ -76,7 +76,7 @@ for _case in planned_cases(config, lds_points=(config.get("converge") or {}).get
         if _case.sweep == "lattice":  # one lattice size alone: results/tables/lattice_k3.csv runs k = 3 first
             register(f"lattice_k{_case.label['k']}", _case.point, _case.label, preset=_case.preset)
 try:
-    _points = chosen_points(config.get("points"), workflow.basedir)
+    _points = chosen_points(config.get("points"), workflow.basedir, presets=config.get("presets"))
 except ValueError as error:
     raise WorkflowError(f"spreadmap: bad chosen points: {error}") from None
 for _i, _p in enumerate(_points):

@@ -1,9 +1,8 @@
 """Snakemake entry: MFR, PD, layer quality, noise estimate, regime and diagnostics of one case from its raw YADE output."""
-import json
-
 from spreadmap.launcher import write_json_atomically
 from spreadmap.metrics import case_metrics
 from spreadmap.logs import log_to
+from spreadmap.records import read_raw
 
 log_to(snakemake)  # noqa: F821
 
@@ -11,6 +10,5 @@ sm = snakemake  # noqa: F821
 if "raw" not in sm.input.keys():
     raise SystemExit(f"spreadmap: case {sm.wildcards.case} was restored from a published table (restored.json) "
                      "and its raw YADE record is not here; delete its folder under results/cases to re-run it")
-with open(sm.input.raw) as fh:
-    raw = json.load(fh)
+raw = read_raw(sm.input.raw)  # a damaged record is moved aside and re-made, never read
 write_json_atomically(sm.output.metrics, case_metrics(raw, sm.params.regime, sm.params.stability, sm.params.metrics))

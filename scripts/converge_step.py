@@ -11,6 +11,7 @@ from spreadmap.convergence.stepper import step
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.metrics.noise import calibrated_noise
+from spreadmap.records import read_json_object, read_metrics
 
 log_to(snakemake)  # noqa: F821
 
@@ -19,14 +20,12 @@ p = sm.params
 n = int(sm.wildcards.n)
 rows = []
 for path in sm.input.metrics:
-    with open(path) as fh:
-        rows.append(json.load(fh))
+    rows.append(read_metrics(path))  # a damaged record is moved aside and re-made, never read
 # run order: the previous step's cases first; noise SDs calibrated by region (config noise_calibration)
 table = calibrated_noise(pd.DataFrame(rows), p.noise_calibration)
 previous = None
 if "previous" in sm.input.keys():
-    with open(sm.input.previous) as fh:
-        previous = json.load(fh)
+    previous = read_json_object(sm.input.previous, "loop step record", ("n", "stop"))
 record = step(table, n, p.converge, previous, fit=make_map_fit(p.surrogate, final=True), ranges=p.ranges,
               maps_cfg=p.maps, lds_seed=p.lds_seed, tolerance=p.tolerance, floors=p.floors,
               cost=PlannedCost.from_config(p.scene_config))

@@ -9,12 +9,13 @@ from spreadmap.convergence import plots
 from spreadmap.design import TARGETS
 from spreadmap.table import usable
 from spreadmap.logs import log_to
+from spreadmap.records import read_table
 
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 p = sm.params
-tables = {Path(t).stem: pd.read_csv(t) for t in sm.input.tables}
+tables = {Path(t).stem: read_table(t) for t in sm.input.tables}
 out = Path(sm.output.summary).parent
 frames, verdicts, long = [], {}, []
 for name, table in tables.items():

@@ -2,16 +2,15 @@
 import json
 from pathlib import Path
 
-import pandas as pd
-
 from spreadmap.summary import run_summary, summary_text
 from spreadmap.logs import log_to
+from spreadmap.records import read_table
 
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 # a set is named by its table: results/tables/<set>.csv, or results/<set>/table.csv (the converge run)
-tables = {(Path(p).parent.name if Path(p).stem == "table" else Path(p).stem): pd.read_csv(p) for p in sm.input.tables}
+tables = {(Path(p).parent.name if Path(p).stem == "table" else Path(p).stem): read_table(p) for p in sm.input.tables}
 summary = run_summary(tables, sm.params.regime, sm.params.floor)
 Path(sm.output.json).write_text(json.dumps(summary, indent=1))
 text = summary_text(summary)

@@ -4,6 +4,7 @@ from pathlib import Path
 import pandas as pd
 
 from spreadmap.logs import log_to
+from spreadmap.records import read_table
 from spreadmap.metrics.noise import calibrated_noise
 from spreadmap.surrogate import fit_surrogate, save_model
 from spreadmap.surrogate.plots import plot_all
@@ -12,7 +13,7 @@ log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 # the cases' noise SDs calibrated by region (config noise_calibration); the table keeps the stated ones
-table = calibrated_noise(pd.read_csv(sm.input.table), sm.params.noise_calibration)
+table = calibrated_noise(read_table(sm.input.table), sm.params.noise_calibration)
 result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table, ranges=sm.params.ranges)
 save_model(result.model, sm.output.model)
 plot_all(result, Path(sm.output.model).parent, prefix="surrogate", floor=sm.params.floor)

@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 from .files import atomic_path, write_text_atomically
+from .records import CorruptFileError, read_raw
 
 # Exit codes of yade_scripts/spreading_case.py. Its own verdicts (refused before running, failed a
 # check, blown up) are deterministic: the same case gives the same verdict. Any other code is a
@@ -79,10 +80,11 @@ def finished_simulation(path: Path | str, params: dict) -> dict | None:
 
     YADE writes its result (atomically) beside the workflow's declared output; a run killed after
     YADE finished but before Snakemake recorded the job as complete then resumes by re-using the
-    result instead of simulating again. Any change of parameters invalidates it."""
+    result instead of simulating again. Any change of parameters invalidates it, and so does a
+    damaged record (truncated, not a JSON object, not a raw record): the case runs again."""
     try:
-        raw = json.loads(Path(path).read_text())
-    except (OSError, ValueError):
+        raw = read_raw(path)
+    except (OSError, CorruptFileError):
         return None
     return raw if raw.get("status") in ("ok", "blown") and raw.get("params") == params else None
 

@@ -1,4 +1,5 @@
-"""Send a Snakemake script's output (stdout and stderr) to the rule's log file as well."""
+"""Send a Snakemake script's output (stdout and stderr) to the rule's log file as well, and turn a
+damaged input file into a re-make (spreadmap.records.remake_when_corrupt)."""
 from __future__ import annotations
 
 import sys
@@ -20,7 +21,12 @@ class _Tee:
 
 
 def log_to(smk) -> None:
-    """Tee stdout and stderr into smk.log[0] (if the rule declares a log)."""
+    """Tee stdout and stderr into smk.log[0] (if the rule declares a log). A damaged file the job
+    reads (spreadmap.records.CorruptFileError) is moved aside and the job ends with one line, so
+    that the next run re-makes it."""
+    from .records import remake_when_corrupt
+
+    remake_when_corrupt()
     if len(smk.log):
         log = open(smk.log[0], "w", buffering=1)
         sys.stdout = _Tee(sys.__stdout__, log)

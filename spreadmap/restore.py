@@ -10,11 +10,13 @@ published and stays missing, so the workflow (rules/common.smk, `case_raw_input`
 it. A case directory that holds a raw record is never touched: a real result wins over a restored
 one. The loop's step records (converge/steps/step_N.json) are restored beside the cases, with
 modification times in the order the workflow made them (cases first, then each step), so that
-Snakemake sees them up to date.
+Snakemake sees them up to date. Every published file is checked against its folder's SHA256SUMS
+(spreadmap/checksums.py) before anything is restored from it: a table that changed since it was
+published is refused, naming the file and how to get it back or re-publish it.
 """
 from __future__ import annotations
 
-import hashlib
+import io
 import json
 import math
 import os
@@ -22,8 +24,10 @@ from pathlib import Path
 
 import pandas as pd
 
+from .checksums import sha256, verified_bytes
 from .convergence.stepper import step_number
 from .files import write_text_atomically
+from .records import CorruptFileError, read_metrics
 
 # Columns of a results table that are the table's labels of a case, not the case's metrics.
 LABEL_COLUMNS = ("sweep", "index", "k", "index_in_lattice", "name", "batch", "lds", "knob", "value", "is_base")
@@ -50,8 +54,13 @@ def case_record(row: dict) -> tuple[dict, dict]:
     return metrics, benchmark
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+def readable_metrics(path: Path) -> bool:
+    """Whether a restored case's metrics.json is there and whole (a truncated one is restored again)."""
+    try:
+        read_metrics(path)
+    except (FileNotFoundError, CorruptFileError):
+        return False
+    return True
 
 
 def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -> dict:
@@ -64,11 +73,14 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
     workdir = Path(workdir)
     counts = {"restored": 0, "kept_real": 0, "duplicates": 0, "not_finished": 0, "already": 0}
     seen = set()
+    checked = []  # every table checked against its published checksum before any case is restored
     for table_path in tables:
-        table = pd.read_csv(table_path)
+        data = verified_bytes(table_path)
+        table = pd.read_csv(io.BytesIO(data))
         if "case_id" not in table.columns:
             raise ValueError(f"{table_path}: not a cases table (no case_id column)")
-        sha = _sha256(table_path)
+        checked.append((table_path, table, sha256(data)))
+    for table_path, table, sha in checked:
         for i, row in enumerate(table.to_dict("records")):
             cid = row["case_id"]
             if cid in seen:
@@ -79,7 +91,7 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
             if (folder / "raw.json").exists():
                 counts["kept_real"] += 1
                 continue
-            if (folder / RESTORED).exists() and (folder / "metrics.json").exists():
+            if (folder / RESTORED).exists() and readable_metrics(folder / "metrics.json"):
                 # restored before: left as it is (a new mtime would make the steps after it stale)
                 counts["already"] += 1
                 continue
@@ -107,11 +119,12 @@ def restore_steps(steps: list[Path | str], workdir: Path | str, mtime: float) ->
     """Copy the loop's step records to workdir/results/converge/, each a second newer than the one
     before it (and than the cases, restored at `mtime`). An existing step is left alone."""
     out = []
+    texts = {path: verified_bytes(path).decode() for path in steps}  # all checked before any is restored
     for k, path in enumerate(sorted(steps, key=step_number), start=1):
         target = Path(workdir) / "results" / "converge" / Path(path).name
         if target.exists():
             continue
-        write_text_atomically(target, Path(path).read_text())
+        write_text_atomically(target, texts[path])
         os.utime(target, (mtime + k, mtime + k))
         out.append(target.name)
     return out

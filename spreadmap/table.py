@@ -4,7 +4,6 @@ Snakemake's benchmark, then the case's noise estimate and its layer quality, the
 its effective gap), and the run summary built from it."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +11,7 @@ import pandas as pd
 
 from .files import atomic_path
 from .metrics import NEW_COLUMNS
+from .records import read_metrics
 from .substrate import effective_gap_um
 
 FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
@@ -50,11 +50,11 @@ def read_benchmark(path: Path | str) -> dict:
 
 
 def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFrame:
-    """labels[i] = {"sweep": ..., "index": ...} for metrics_files[i]."""
+    """labels[i] = {"sweep": ..., "index": ...} for metrics_files[i]. A metrics file that is not a
+    whole metrics record raises spreadmap.records.CorruptFileError naming it."""
     rows = []
     for mfile, bfile, label in zip(metrics_files, benchmark_files, labels):
-        with open(mfile) as fh:
-            row = json.load(fh)
+        row = read_metrics(mfile)  # a truncated or damaged record: CorruptFileError, never a row
         row.update(label)
         row.update(read_benchmark(bfile))
         rows.append(row)

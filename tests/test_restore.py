@@ -10,6 +10,7 @@ import pandas as pd
 import yaml
 
 from conftest import ROOT, make_workflow, planned_jobs, snakemake
+from spreadmap.checksums import write_manifest
 from spreadmap.restore import restore_cases, restore_steps
 from spreadmap.table import build_table
 
@@ -101,6 +102,7 @@ def test_a_case_that_did_not_finish_is_not_restored(tmp_path):
     published.loc[1, "reason"] = "yade exited with code 137 (killed)"
     table = tmp_path / "cases_x.csv"
     published.to_csv(table, index=False)
+    write_manifest(tmp_path)  # published: its checksum beside it
     counts = restore_cases([table], tmp_path, mtime=1.0e9)
     assert counts["restored"] == 2 and counts["not_finished"] == 1
     assert not (tmp_path / "results" / "cases" / published["case_id"][1]).exists()

@@ -10,4 +10,5 @@ cp "$src"/results/fidelity/* "$repo/docs/fidelity/"
 cp "$src"/results/tables/fidelity.csv "$repo/docs/fidelity/cases_presets.csv"
 cp "$src"/results/tables/knobs.csv "$repo/docs/fidelity/cases_knobs.csv"
 cp "$src"/config.yaml "$repo/docs/fidelity/config.yaml"  # the configuration it ran with
+"${PYTHON:-$repo/.venv/bin/python}" "$repo/tools/publish_checksums.py" "$repo/docs/fidelity"  # its SHA256SUMS
 echo "published to $repo/docs/fidelity:"; ls "$repo/docs/fidelity"

@@ -10,8 +10,9 @@ finished cases), the config it ran with, and copies the analyses that exist (the
 sweeps' convergence, the converge run's steps so far (and, while it runs, the table of its cases
 so far), its table and stopping path, the surrogate, the maps, the
 held-out points' table); what does not exist yet is listed. Then summary.md (and the trends'
-tables trend_*.csv) from what is there (spreadmap.study_summary). A later session grows the same
-workflow directory (Snakemake re-uses every finished case) and publishes again.
+tables trend_*.csv) from what is there (spreadmap.study_summary). Last, the folder's SHA256SUMS
+(spreadmap.checksums: what tools/restore_study.py verifies before it restores). A later session
+grows the same workflow directory (Snakemake re-uses every finished case) and publishes again.
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from spreadmap import config as cfgmod  # noqa: E402
+from spreadmap.checksums import write_manifest  # noqa: E402
 from spreadmap.study_cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress  # noqa: E402
 from spreadmap.study_summary import summary_markdown  # noqa: E402
 from spreadmap.table import write_table  # noqa: E402
@@ -81,6 +83,7 @@ def main(argv=None) -> int:
     text = summary_markdown(args.out, config.get("ranges"))
     (args.out / "summary.md").write_text(text)
     print(text)
+    print(f"checksums: {write_manifest(args.out)}")
     return 0
 
 

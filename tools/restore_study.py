@@ -12,18 +12,28 @@ records (converge/steps/step_N.json), newer than the cases in the order they wer
 held-out check's files (heldout/: its points and the predictions made before its runs). The raw
 records are not published: a restored case has no picture, VTK export or re-read of its overlap.
 Check with `snakemake -n` in WORKDIR that only unfinished cases would run.
+
+Every file it reads is first checked against the folder's SHA256SUMS (spreadmap/checksums.py);
+one that changed since it was published stops the restore before anything is written, with a
+message naming the file and how to get it back or re-publish it (exit status 2).
 """
 from __future__ import annotations
 
 import argparse
-import shutil
 import sys
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from spreadmap.checksums import PublishedFileError, verified_bytes  # noqa: E402
+from spreadmap.files import atomic_path  # noqa: E402
 from spreadmap.restore import restore_cases, restore_steps  # noqa: E402
+
+
+def write_bytes_atomically(path: Path, data: bytes) -> None:
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
 
 
 def main(argv=None) -> int:
@@ -37,16 +47,23 @@ def main(argv=None) -> int:
     tables = sorted(args.published.glob("cases_*.csv")) + sorted(args.published.glob("*_seeds.csv"))
     if not tables:
         parser.error(f"{args.published}: no cases_*.csv")
-    # an hour in the past, so that anything the resumed run makes is newer
-    base = time.time() - 3600
-    counts = restore_cases(tables, args.workdir, mtime=base)
-    steps = restore_steps(list((args.published / "converge" / "steps").glob("step_*.json")), args.workdir, mtime=base)
+    step_files = list((args.published / "converge" / "steps").glob("step_*.json"))
     # the held-out check's points and predictions (made before its runs): scoring needs them
     held = [f for f in sorted((args.published / "heldout").glob("*.csv"))
             if not (args.workdir / "heldout" / f.name).exists()]
+    try:  # every published file checked before anything is restored
+        held_bytes = {f: verified_bytes(f) for f in held}
+        for f in tables + step_files:
+            verified_bytes(f)
+    except PublishedFileError as error:
+        print(f"restore_study: refused: {error}", file=sys.stderr)
+        return 2
+    # an hour in the past, so that anything the resumed run makes is newer
+    base = time.time() - 3600
+    counts = restore_cases(tables, args.workdir, mtime=base)
+    steps = restore_steps(step_files, args.workdir, mtime=base)
     for f in held:
-        (args.workdir / "heldout").mkdir(exist_ok=True)
-        shutil.copyfile(f, args.workdir / "heldout" / f.name)
+        write_bytes_atomically(args.workdir / "heldout" / f.name, held_bytes[f])
     if held:
         print(f"restore_study: heldout/ {', '.join(f.name for f in held)}")
     print(f"restore_study: {counts['restored']} cases restored from {len(tables)} tables "

@@ -1,11 +1,17 @@
 """The saved surrogate: one fitted model per target, the cases it was trained on, its metadata.
 
 The file is a joblib pickle (load only files you trust); a JSON sidecar beside it holds the
-metadata for people and tools. ``load_model`` turns every way a file can fail to be a surrogate of
-this version (missing, truncated, corrupt, foreign, older format) into one ``ModelFileError`` line.
+metadata for people and tools, and the SHA-256 of the file as it was saved. ``load_model`` turns
+every way a file can fail to be a surrogate of this version (missing, truncated, corrupt, foreign,
+older format) into one ``ModelFileError`` line; a truncated or corrupted file (one that does not
+unpickle, or whose bytes differ from the sidecar's checksum: a flipped byte in a weight array
+unpickles fine) is a ``CorruptModelError``, which a Snakemake job moves aside so that the next run
+retrains it (spreadmap.records).
 """
 from __future__ import annotations
 
+import hashlib
+import io
 import json
 import warnings
 from dataclasses import dataclass, field
@@ -16,12 +22,17 @@ from scipy.spatial import cKDTree
 
 from ..design import NAMES
 from ..files import atomic_path
+from ..records import CorruptFileError
 
 FORMAT = "spreadmap-surrogate/2"
 
 
 class ModelFileError(ValueError):
     """A model file that cannot be used: the message says which file and why, in one line."""
+
+
+class CorruptModelError(ModelFileError, CorruptFileError):
+    """A model file that is truncated or corrupted (not merely foreign or of an older format)."""
 
 
 @dataclass
@@ -81,17 +92,33 @@ def sidecar_path(path) -> Path:
 
 
 def save_model(model: SurrogateModel, path) -> tuple[Path, Path]:
-    """joblib file of the model and a JSON sidecar of its metadata, each written atomically."""
+    """joblib file of the model and a JSON sidecar of its metadata and the file's SHA-256
+    (`model_sha256`), each written atomically."""
     import joblib
 
     path = Path(path)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as fh:
             joblib.dump(model, fh)
+        digest = hashlib.sha256(tmp.read_bytes()).hexdigest()
     side = sidecar_path(path)
     with atomic_path(side) as tmp:
-        tmp.write_text(json.dumps(model.metadata, indent=2, sort_keys=True, allow_nan=False) + "\n")
+        tmp.write_text(json.dumps({**model.metadata, "model_sha256": digest}, indent=2, sort_keys=True,
+                                  allow_nan=False) + "\n")
     return path, side
+
+
+_RETRAIN = "move it aside and retrain it: `snakemake results/surrogate/model.joblib`"
+
+
+def _saved_sha256(path: Path) -> str | None:
+    """The checksum the sidecar recorded when the model was saved; None without one (a sidecar
+    that is missing, unreadable or from before the checksum: the metadata is not the model)."""
+    try:
+        value = json.loads(sidecar_path(path).read_text()).get("model_sha256")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return value if isinstance(value, str) else None
 
 
 def load_model(path) -> SurrogateModel:
@@ -103,12 +130,18 @@ def load_model(path) -> SurrogateModel:
     path = Path(path)
     if not path.is_file():
         raise ModelFileError(f"surrogate model file not found: {path}")
+    data = path.read_bytes()
+    saved_sha = _saved_sha256(path)
+    if saved_sha is not None and hashlib.sha256(data).hexdigest() != saved_sha:
+        raise CorruptModelError(path, f"{path} is not the surrogate that was saved: its SHA-256 differs from the "
+                                      f"one its sidecar {sidecar_path(path).name} recorded (truncated or corrupted); "
+                                      f"{_RETRAIN}")
     try:
-        model = joblib.load(path)
+        model = joblib.load(io.BytesIO(data))
     except Exception as error:  # noqa: BLE001  unpickling foreign bytes can raise anything (struct.error, ...)
         reason = str(error).splitlines()[0] if str(error) else type(error).__name__
-        raise ModelFileError(f"{path} is not a readable spreadmap surrogate ({type(error).__name__}: "
-                             f"{reason[:200]}); retrain it with `snakemake results/surrogate/model.joblib`") from None
+        raise CorruptModelError(path, f"{path} is not a readable spreadmap surrogate ({type(error).__name__}: "
+                                      f"{reason[:200]}): truncated or corrupted; {_RETRAIN}") from None
     if not isinstance(model, SurrogateModel):
         raise ModelFileError(f"{path} does not hold a spreadmap surrogate (it holds a {type(model).__name__})")
     if getattr(model, "format", None) != FORMAT:

@@ -1,0 +1,128 @@
+"""Reading the workflow's own files so that a damaged one is never read as data.
+
+The workflow writes its files atomically (spreadmap/files.py), so a run killed half-way leaves
+the old file or the new one. A file can still be damaged from outside: a copy cut short, a disk
+that lost blocks, an edit by hand. Each reader here checks what a whole file of its kind must be
+(a raw record or a metrics record: a JSON object with its keys; a table: every row as long as the
+header, ending with a line break) and raises CorruptFileError, naming the file and why, instead
+of returning what it could parse.
+
+Under Snakemake (`spreadmap.logs.log_to` installs `remake_when_corrupt`) a job that meets such a
+file moves it aside (<name>.corrupt, kept to look at) and ends with that one line; the next
+`snakemake` sees the file missing and re-makes it with the rule that made it, so that it is
+re-made, not read.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import sys
+from pathlib import Path
+
+RAW_FORMAT = "spreadmap-raw"
+
+
+class CorruptFileError(ValueError):
+    """A file that is there but is not a whole file of its kind. `remakeable`: a rule of the
+    workflow makes it, so moving it aside makes the next run re-make it."""
+
+    def __init__(self, path: Path | str, message: str, remakeable: bool = True):
+        super().__init__(message)
+        self.path = Path(path)
+        self.remakeable = remakeable
+
+
+def _text(path: Path, what: str) -> str:
+    data = path.read_bytes()  # a missing file raises FileNotFoundError: missing is not corrupt
+    if not data.strip():
+        raise CorruptFileError(path, f"{path}: empty {what} ({len(data)} bytes); not read as data")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise CorruptFileError(path, f"{path}: {what} is not UTF-8 text (corrupted at byte {error.start}); "
+                                     "not read as data") from None
+
+
+def read_json_object(path: Path | str, what: str, required=()) -> dict:
+    """A JSON object with the `required` keys, else CorruptFileError naming the file and why."""
+    path = Path(path)
+    text = _text(path, what)
+    try:
+        record = json.loads(text)
+    except json.JSONDecodeError as error:
+        ends = error.pos >= len(text.rstrip()) or error.msg.startswith("Unterminated string")
+        why = "truncated: the file ends before its JSON does" if ends else "corrupted"
+        raise CorruptFileError(path, f"{path}: {what} is not valid JSON, {why} ({error.msg}, line {error.lineno} "
+                                     f"column {error.colno}); not read as data") from None
+    if not isinstance(record, dict):
+        raise CorruptFileError(path, f"{path}: {what} is not a JSON object (a {type(record).__name__}); "
+                                     "not read as data")
+    missing = [k for k in required if k not in record]
+    if missing:
+        raise CorruptFileError(path, f"{path}: {what} lacks {', '.join(missing)}; not read as data")
+    return record
+
+
+def read_raw(path: Path | str) -> dict:
+    """A case's raw YADE record (raw.json / simulated.json)."""
+    raw = read_json_object(path, "raw YADE record", ("format", "status", "params"))
+    if not str(raw["format"]).startswith(RAW_FORMAT):
+        raise CorruptFileError(path, f"{path}: not a raw YADE record (format {raw['format']!r}); not read as data")
+    return raw
+
+
+def read_metrics(path: Path | str) -> dict:
+    """A case's metrics record (metrics.json)."""
+    return read_json_object(path, "metrics record", ("case_id", "status"))
+
+
+def read_table(path: Path | str):
+    """A CSV table the workflow wrote (pandas `to_csv`): refused if it does not end with a line
+    break or a row's field count differs from the header's (a table cut off mid-row); else what
+    pd.read_csv reads from it. A table cut exactly at a line break has whole rows and passes:
+    the atomic writer is what rules that out."""
+    path = Path(path)
+    text = _text(path, "table")
+    if not text.endswith("\n"):
+        raise CorruptFileError(path, f"{path}: the table ends mid-row (no line break at its end: half-written); "
+                                     "not read as data")
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        header = next(reader)
+        for fields in reader:
+            if fields and len(fields) != len(header):
+                raise CorruptFileError(path, f"{path}: row {reader.line_num} has {len(fields)} fields, the header "
+                                             f"{len(header)} (half-written or corrupted); not read as data")
+    except csv.Error as error:
+        raise CorruptFileError(path, f"{path}: not a CSV table ({error}, line {reader.line_num}); "
+                                     "not read as data") from None
+    import pandas as pd  # here: the YADE job's environment reads raw records without pandas
+
+    return pd.read_csv(io.StringIO(text))
+
+
+def quarantine(path: Path | str) -> Path:
+    """Move a damaged file aside to <name>.corrupt (replacing an older one); returns where."""
+    path = Path(path)
+    moved = path.with_name(path.name + ".corrupt")
+    os.replace(path, moved)
+    return moved
+
+
+def remake_when_corrupt() -> None:
+    """Install the hook of a Snakemake job: an uncaught CorruptFileError of a file a rule makes
+    moves the file aside and ends the job with one line saying so (exit status 1); anything else
+    goes to the usual hook (a traceback)."""
+    previous = sys.excepthook
+
+    def hook(kind, error, tb):
+        if isinstance(error, CorruptFileError) and error.remakeable and error.path.exists():
+            moved = quarantine(error.path)
+            print(f"spreadmap: {error}. Moved it aside to {moved}; run snakemake again: it re-makes "
+                  f"{error.path} with the rule that made it.", file=sys.stderr)
+        else:
+            previous(kind, error, tb)
+
+    sys.excepthook = hook
