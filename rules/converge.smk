@@ -18,6 +18,8 @@ checkpoint converge_step:
         maps=config.get("maps", {}),
         lds_seed=SWEEPS.get("lds", {}).get("seed", 42),
         noise_calibration=config.get("noise_calibration", []),
+        noise_model=config.get("noise_model"),
+        counting_c=config.get("metrics", {}).get("counting_noise_c", 0.37),
         surrogate=config.get("surrogate", {}),
         scene_config={k: config.get(k) for k in ("preset", "presets", "material", "scene", "metrics", "converge")},
     wildcard_constraints:

@@ -20,6 +20,8 @@ rule maps:
         regime=config["regime"],
         ranges=RANGES,
         noise_calibration=config.get("noise_calibration", []),
+        noise_model=config.get("noise_model"),
+        counting_c=config.get("metrics", {}).get("counting_noise_c", 0.37),
     log:
         "logs/maps.log",
     localrule: True

@@ -16,6 +16,8 @@ rule surrogate:
         surrogate=config.get("surrogate", {}),
         ranges=RANGES,
         noise_calibration=config.get("noise_calibration", []),
+        noise_model=config.get("noise_model"),
+        counting_c=config.get("metrics", {}).get("counting_noise_c", 0.37),
         floor=FLOOR,
     log:
         "logs/surrogate.log",

@@ -8,14 +8,15 @@ from spreadmap import fidelity_plots as plots
 from spreadmap import fidelity_study as study
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
+from spreadmap.records import read_table
 
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 reference = sm.params.reference
-cases = pd.read_csv(sm.input.presets)
+cases = read_table(sm.input.presets)  # a half-written table is moved aside and re-made, never read
 per_point, presets = study.preset_errors(cases, reference)
-knobs = study.knob_errors(pd.read_csv(sm.input.knobs)) if sm.input.get("knobs") else None
+knobs = study.knob_errors(read_table(sm.input.knobs)) if sm.input.get("knobs") else None
 goals = [study.goal(presets, name) for name in sm.params.goal_presets if name in set(presets["preset"])]
 
 per_point.to_csv(sm.output.per_point, index=False)

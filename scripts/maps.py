@@ -6,7 +6,7 @@ import pandas as pd
 from spreadmap import maps, sensitivity
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
-from spreadmap.metrics.noise import calibrated_noise
+from spreadmap.noise_law.apply import case_noise
 from spreadmap.surrogate import load_model
 from spreadmap.surrogate.settings import map_config
 
@@ -17,7 +17,7 @@ p = sm.params
 cfg = map_config(p.maps)
 out = Path(sm.output.ranking).parent
 model = load_model(sm.input.model)
-cases = calibrated_noise(read_table(sm.input.table), p.noise_calibration)  # config noise_calibration
+cases = case_noise(read_table(sm.input.table), p.noise_model, p.noise_calibration, p.counting_c)  # noise_model, noise_calibration
 usable = maps.usable_cases(cases)
 y = cfg["machine"]["y"]
 auto_y, scores = maps.choose_machine_y(usable, model.targets)

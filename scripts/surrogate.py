@@ -5,15 +5,16 @@ import pandas as pd
 
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
-from spreadmap.metrics.noise import calibrated_noise
+from spreadmap.noise_law.apply import case_noise
 from spreadmap.surrogate import fit_surrogate, save_model
 from spreadmap.surrogate.plots import plot_all
 
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
-# the cases' noise SDs calibrated by region (config noise_calibration); the table keeps the stated ones
-table = calibrated_noise(read_table(sm.input.table), sm.params.noise_calibration)
+# the cases' noise SDs: MFR's and PD's from the fitted law (config noise_model), the others scaled by
+# region (config noise_calibration); the table keeps the stated ones
+table = case_noise(read_table(sm.input.table), sm.params.noise_model, sm.params.noise_calibration, sm.params.counting_c)
 result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table, ranges=sm.params.ranges)
 save_model(result.model, sm.output.model)
 plot_all(result, Path(sm.output.model).parent, prefix="surrogate", floor=sm.params.floor)

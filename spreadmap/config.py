@@ -111,6 +111,13 @@ def _check_cross_keys(config: dict) -> None:
         if region.get("h_over_d_from", 0.0) >= region.get("h_over_d_below", float("inf")):
             raise ConfigError(f"config key 'noise_calibration[{i}]': h_over_d_from {region['h_over_d_from']} "
                               f"must be below h_over_d_below {region['h_over_d_below']} (the region is empty)")
+    if config.get("noise_model"):
+        from .noise_law.apply import check_sections
+
+        try:
+            check_sections(config["noise_model"], config.get("noise_calibration"))
+        except ValueError as error:
+            raise ConfigError(f"config key 'noise_calibration': {error}") from None
     named = set(((config.get("points") or {}).get("named") or {}))
     for key in ("cases", "vtk"):
         for name in (config.get("pictures") or {}).get(key, []):

@@ -30,6 +30,14 @@ def raw_config():
      r"'noise_calibration\[0\]': .* must be a mapping with at least one of the keys \['h_over_d_below', 'h_over_d_from'\]"),
     (lambda c: c.update(noise_calibration=[{"h_over_d_from": 3, "h_over_d_below": 2, "factor": 0.6}]),
      r"'noise_calibration\[0\]': h_over_d_from 3 must be below h_over_d_below 2 \(the region is empty\)"),
+    # the fitted noise law sets MFR's and PD's SDs: a hand band beside it may scale only the others
+    (lambda c: c.update(noise_calibration=[{"h_over_d_below": 2, "factor": 1.37}]),
+     r"'noise_calibration': noise_calibration\[0\] scales \['mfr', 'pd'\], whose noise SDs noise_model sets "
+     r"\(a region without `targets` scales every target\)"),
+    (lambda c: c.update(noise_calibration=[{"h_over_d_from": 3, "factor": 0.61, "targets": ["pd", "coverage"]}]),
+     r"'noise_calibration': noise_calibration\[0\] scales \['pd'\]"),
+    (lambda c: c["noise_model"]["mfr"].update(n_exponent=0.5), r"'noise_model\.mfr\.n_exponent': value 0\.5 .* must be <= 0"),
+    (lambda c: c["noise_model"].pop("pd"), r"'noise_model': 'pd' is a required property"),
 ])
 def test_bad_values_are_refused_with_the_key_named(raw_config, change, message):
     change(raw_config)

@@ -176,3 +176,19 @@ def test_the_published_law_recomputes_from_the_published_seed_repeats():
         block = published["config"]["noise_model"][target]
         assert block == {"rel_sd": round(math.exp(law.coef[0]), 5), "n_exponent": round(law.coef[1], 4),
                          "h_over_d_exponent": round(law.coef[2], 4)}
+
+
+def test_the_shipped_config_sets_the_published_law_and_the_published_configs_keep_their_bands():
+    """config.yaml's noise_model is docs/noise's fitted law; the published studies' configs have none,
+    so their cases' SDs are the stated ones x the bands they ran with."""
+    from spreadmap import config as spreadmap_config
+
+    shipped = spreadmap_config.load(ROOT / "config.yaml")
+    published = json.loads((ROOT / "docs" / "noise" / "law.json").read_text())["config"]["noise_model"]
+    assert shipped["noise_model"] == published
+    assert all(set(region["targets"]).isdisjoint({"mfr", "pd"}) for region in shipped["noise_calibration"])
+    study = spreadmap_config.load(ROOT / "docs" / "study" / "config.yaml")
+    assert "noise_model" not in study
+    table = results_table()
+    pd.testing.assert_frame_equal(case_noise(table, study.get("noise_model"), study["noise_calibration"]),
+                                  calibrated_noise(table, study["noise_calibration"]))
