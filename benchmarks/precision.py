@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import json
 import math
 import multiprocessing
@@ -47,6 +48,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
+
+from spreadmap.checksums import republish_if_listed, verified_bytes  # noqa: E402
 
 POINTS = {  # f, d_um, h_um, v_mm_s: the four fidelity points, the two corners, two more
     "normal": (0.30, 30, 65, 10),
@@ -505,7 +508,9 @@ def main(argv=None) -> int:
     jobs = build_jobs(args.arms, args.points, args.seeds, base)
     published = {}
     if args.resume_csv and Path(args.resume_csv).exists():
-        with open(args.resume_csv, newline="") as fh:
+        # a published CSV (docs/precision) is checked against its folder's SHA256SUMS first
+        resumed = verified_bytes(args.resume_csv, required=False).decode()
+        with io.StringIO(resumed, newline="") as fh:
             for r in csv.DictReader(fh):
                 if r["status"] == "ok":
                     published[(r["arm"], r["point"], int(r["seed"]))] = {
@@ -542,6 +547,8 @@ def main(argv=None) -> int:
             writer.writeheader()
             for r in rows:
                 writer.writerow({**r, "case_dir": Path(r["case_dir"]).name})
+        if republish_if_listed(args.csv):  # a published table: its folder's checksums follow it
+            print(f"re-published the checksums of {args.csv}", flush=True)
     if args.summary:
         Path(args.summary).parent.mkdir(parents=True, exist_ok=True)
         Path(args.summary).write_text(text)

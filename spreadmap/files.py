@@ -1,9 +1,11 @@
 """Atomic, durable file writes: write beside the target, flush it to disk (fsync), rename it over
 the target, then flush the folder (so the rename itself survives a power cut). A reader, a run
 killed half-way or a machine that loses power never sees a partial or empty file: it sees the
-old file or the new one."""
+old file or the new one. A full disk or a file-size limit met while writing leaves the old file
+too, and the error says so, naming the file."""
 from __future__ import annotations
 
+import errno
 import os
 import uuid
 from contextlib import contextmanager
@@ -19,21 +21,34 @@ def fsync_path(path: Path | str) -> None:
         os.close(fd)
 
 
+# errors of a write that ran out of room: no space left, a disk quota, a file-size limit
+DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
 @contextmanager
 def atomic_path(path: Path | str):
     """Yield a temporary path beside `path` to write to; on success it is flushed to disk and
     replaces `path` in one rename (then the folder is flushed). On an error it is removed and
-    `path` is left as it was."""
+    `path` is left as it was; a full disk (ENOSPC, EDQUOT) or a file-size limit (EFBIG) is raised
+    as an OSError of the same errno whose message names `path` and says so."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     # unique per process and call (two threads of one process never share it); a dot file, so
     # that globs of the folder's results do not see it
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+    replaced = False
     try:
         yield tmp
         fsync_path(tmp)
         os.replace(tmp, path)
+        replaced = True
         fsync_path(path.parent)
+    except OSError as error:
+        if replaced or error.errno not in DISK_FULL:
+            raise
+        raise OSError(error.errno, f"{os.strerror(error.errno)} while writing {path}: the disk is full or a "
+                                   f"file-size limit (ulimit -f) was hit; {path} was left as it was and the partial "
+                                   f"copy beside it removed") from error
     finally:
         if tmp.exists():
             tmp.unlink()

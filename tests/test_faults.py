@@ -5,12 +5,15 @@
 - a published cases table that changed since it was published: the restore refuses it (naming
   the file and how to re-publish) before it restores any case; an intact one goes through;
 - a truncated raw.json or metrics.json, a corrupted saved model, a half-written table: detected
-  and never read as data; under Snakemake the file is moved aside and the next run re-makes it.
+  and never read as data; under Snakemake the file is moved aside and the next run re-makes it;
+- a full disk (a file-size limit) while a table is written: the previous table survives byte for
+  byte, no temporary file is left, and the error names the file and the limit.
 
 No YADE: the Snakemake tests only plan or run analysis rules (a few seconds each).
 """
 from __future__ import annotations
 
+import errno
 import json
 import os
 import re
@@ -25,7 +28,8 @@ import pandas as pd
 import pytest
 
 from conftest import ROOT, make_workflow, planned_jobs, snakemake
-from spreadmap.checksums import PublishedFileError, check_folder, republish_if_listed, write_manifest
+from spreadmap.checksums import (PublishedFileError, check_folder, republish_if_listed, verified_bytes,
+                                 write_manifest)
 from spreadmap.launcher import finished_simulation
 from spreadmap.records import CorruptFileError, read_metrics, read_raw, read_table
 from spreadmap.restore import case_record, restore_cases, restore_steps
@@ -208,6 +212,21 @@ def test_a_restored_case_whose_metrics_record_rotted_is_restored_again(published
     assert counts["restored"] == 1 and counts["already"] == 4 and metrics.read_text() == whole
 
 
+def test_a_resume_from_a_published_csv_checks_it_and_a_rewrite_re_publishes_it(published, tmp_path):
+    """benchmarks/precision.py --resume-csv reads a CSV through verified_bytes(required=False): a
+    published one (listed in a manifest) must match, one never published is read as it is; its
+    --csv rewrite of a published table re-makes the manifest (republish_if_listed)."""
+    table = published / "cases_lds.csv"
+    assert verified_bytes(table, required=False) == table.read_bytes()
+    table.write_bytes(table.read_bytes().replace(b",ok,", b",failed,", 1))
+    with pytest.raises(PublishedFileError, match="does not match its published checksum"):
+        verified_bytes(table, required=False)
+    assert republish_if_listed(table) == published / "SHA256SUMS" and verified_bytes(table) == table.read_bytes()
+    loose = tmp_path / "run.csv"
+    loose.write_text("a\n1\n")
+    assert verified_bytes(loose, required=False) == b"a\n1\n" and republish_if_listed(loose) is None
+
+
 def test_a_table_without_a_published_checksum_is_refused(tmp_path):
     table = tmp_path / "cases_x.csv"
     pd.read_csv(STUDY / "cases_lds.csv").head(2).to_csv(table, index=False)
@@ -354,7 +373,7 @@ def test_a_corrupted_saved_model_is_refused_and_moved_aside_by_a_job(saved_model
 
 
 # Snakemake re-makes what was moved aside ----------------------------------------------------------
-@pytest.mark.slow  # five Snakemake starts: 81 s beside two YADE runs on 2 cores
+@pytest.mark.slow  # six Snakemake starts: 38 s on this machine, 81 s beside two YADE runs on 2 cores
 def test_snakemake_remakes_a_truncated_metrics_or_raw_record_instead_of_reading_it(tmp_path):
     """A chosen point's case on disk as a finished run leaves it, but with a truncated metrics.json:
     the table job refuses it and moves it aside, and the next plan re-makes it from the raw record;
@@ -397,3 +416,45 @@ def test_snakemake_remakes_a_truncated_metrics_or_raw_record_instead_of_reading_
     assert (case / "raw.json.corrupt").exists() and not (case / "raw.json").exists()
     jobs = plan("results/tables/points.csv")  # the case runs again
     assert jobs["run_case"] == 1 and jobs["case_metrics"] == 1 and jobs["results_table"] == 1, jobs
+
+
+# ------------------------------------------------------------------------------------------------
+# a full disk while a table is written
+# ------------------------------------------------------------------------------------------------
+FULL_DISK = """
+import resource, signal, sys
+import pandas as pd
+from spreadmap.files import write_text_atomically
+from spreadmap.table import write_table
+
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails with EFBIG instead of killing us
+resource.setrlimit(resource.RLIMIT_FSIZE, (__LIMIT__, __LIMIT__))
+big = pd.DataFrame({"case_id": [f"case-{i:06d}" for i in range(20000)], "mfr": 0.123456789})
+try:
+    if __WRITER__ == "table":
+        write_table(big, __PATH__)
+    else:
+        write_text_atomically(__PATH__, big.to_csv(index=False))
+except OSError as error:
+    print(error.errno)
+    print(error)
+    sys.exit(3)
+"""
+
+
+@pytest.mark.parametrize("writer", ["table", "text"])
+def test_a_full_disk_while_a_table_is_written_leaves_the_previous_table(tmp_path, writer):
+    path = tmp_path / "tables" / "lds.csv"
+    path.parent.mkdir()
+    shutil.copyfile(STUDY / "cases_lds.csv", path)  # the previous table, ~200 kB
+    before = path.read_bytes()
+    limit = 64 * 1024
+    assert len(before) > limit  # a file-size limit blocks only writing beyond it
+    code = FULL_DISK.replace("__LIMIT__", str(limit)).replace("__WRITER__", repr(writer)).replace("__PATH__", repr(str(path)))
+    run = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert run.returncode == 3, run.stdout + run.stderr
+    number, message = run.stdout.split("\n", 1)
+    assert int(number) == errno.EFBIG
+    assert path.read_bytes() == before  # byte for byte
+    assert sorted(p.name for p in path.parent.iterdir()) == ["lds.csv"]  # no temporary file left
+    assert str(path) in message and "file-size limit" in message and "left as it was" in message, message
