@@ -264,8 +264,8 @@ O.engines = [
     PyRunner(command="record_overlap()", iterPeriod=int(P["overlap_every"]), label="record_overlap"),
 ]
 # With `timing` on, YADE times every engine (O.timingEnabled; a few % of overhead): the raw record
-# gets each phase's CPU seconds per engine and its steps and mean sphere count, to see where a
-# sphere-step's cost goes (benchmarks/engine_profile.py). Off in the workflow's cases.
+# gets each phase's seconds per engine (YADE's timers: wall-clock time of this single thread), to
+# see where a sphere-step's cost goes (benchmarks/engine_profile.py). Off in the workflow's cases.
 O.timingEnabled = bool(P.get("timing"))
 
 state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": None,
@@ -473,7 +473,7 @@ def engine_seconds():
 
 def close_phase_cost():
     """The phase now ending: its steps, its mean sphere count (at its start and end) and, with
-    `timing`, each engine's CPU seconds in it."""
+    `timing`, each engine's timer seconds (wall clock) in it."""
     mark = state["phase_mark"] or {"iter": 0, "spheres": len(sphere_ids), "engines": {}}
     now = engine_seconds() if P.get("timing") else {}
     state["phase_cost"][state["phase"]] = {
