@@ -234,7 +234,6 @@ if placed != int(P["n_particles"]):
     log("FAILED: makeCloud placed %d of %d spheres in the cloud box (%.0f um high): the cloud is too dense; "
         "lower the config key scene.cloud_fraction" % (placed, P["n_particles"], P["cloud_height"] * 1e6))
     sys.exit(EXIT_FAILED)
-
 sphere_ids = list(cloud.toSimulation(material=frict))
 for i in sphere_ids:
     O.bodies[i].mask = POWDER_MASK
@@ -278,7 +277,6 @@ single_particle_ke_bound = 0.5 * mass * P["max_speed"] ** 2
 
 def spheres():
     return (O.bodies[i] for i in sphere_ids)
-
 
 
 def blade_rear_x():
