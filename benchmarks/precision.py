@@ -89,6 +89,10 @@ ARMS = {
     # the heap left to come to rest before the blade starts: relax up to 2 free-fall times of the
     # pile instead of 0.5 (it ended on its time cap with spheres at up to 44 mm/s)
     "rested": {"rev": None, "overrides": {"scene": {"relax_time_factor": 2.0}}},
+    # the heap fed from above during the move (scene.fed_heap; issue 31): the pile holds what
+    # passes before the window plus the standing reserve, spheres are added ahead of the blade
+    # whenever the heap falls below that reserve; the window's length no longer sizes the pile
+    "fed": {"rev": None, "overrides": {"scene": {"fed_heap": True}}},
     "reserve_1h": {"rev": None, "overrides": {"scene": {"pile_reserve": 2.33}}, "points": ["fine_thick_corner"]},
     "reserve_2h": {"rev": None, "overrides": {"scene": {"pile_reserve": 4.67}}, "points": ["fine_thick_corner"]},
 }

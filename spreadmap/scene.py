@@ -89,8 +89,12 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # the transient, the window and its own thickness.
     sphere_volume = math.pi * d ** 3 / 6.0
     target = precision_target(preset, config)
+    # A fed heap (scene.fed_heap): spheres are added ahead of the blade during the move whenever
+    # the heap falls below the standing reserve, so the pile holds only what passes before the
+    # window opens plus that reserve; the window's own consumption is fed, not piled.
+    fed = bool(scene.get("fed_heap", False))
     if target is None:
-        need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + window + blade)
+        need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + (0.0 if fed else window) + blade)
         window_cap = window
         window_expected = window
     else:
@@ -98,7 +102,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # transient and under the blade at a generous MFR, times a margin (not the densest
         # packing); expressed per unit width, as the heap-reserve rule above, over the pile's height
         mfr_high = scene["mfr_expected_max"]
-        need = scene["pile_margin"] * (target * sphere_volume / width + mfr_high * h * (transient + blade))
+        need = scene["pile_margin"] * ((0.0 if fed else target * sphere_volume / width) + mfr_high * h * (transient + blade))
         need *= heap / (h + heap)  # the whole pile, not only its heap above the gap, is the reserve
         window_cap = max(window, preset["window_max_d"] * d)
         window_expected = min(window_cap, max(window, target * sphere_volume / (scene["mfr_expected"] * h * width)))
@@ -108,6 +112,10 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # fed a flow that fell from 0.5 to 0.1 within the window). Its area is pile_reserve x h^2.
         need += scene["pile_reserve"] * h * h * packing * heap / (h + heap)
     pile_length = max(preset["pile_length_min_d"] * d, need / (packing * heap))
+    # the fed heap's size: the standing reserve (pile_reserve x h^2 of bulk powder) plus what fills
+    # the gap under the blade, in spheres
+    feed_count = (int(round(packing * width * (scene["pile_reserve"] * h * h + blade * h) / sphere_volume))
+                  if fed else None)
     pile_height = h + heap
     n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))
     # makeCloud keeps sphere centres one radius inside the box: size the cloud on that inner box
@@ -189,4 +197,6 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "counting_noise_c": configured_counting_c(config),
         "freeze_behind_d": scene.get("freeze_behind_d"),
         "freeze_speed_ratio": float(scene.get("freeze_speed_ratio", 0.02)),
+        "feed_count": feed_count,
+        "feed_zone": float(scene.get("feed_zone_d", 4.0)) * d,
     }

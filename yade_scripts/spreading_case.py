@@ -22,6 +22,7 @@
 import json
 import math
 import os
+import random
 import sys
 import time
 
@@ -86,6 +87,8 @@ PARAMS = {
     "freeze_behind_d": None,
     "freeze_speed_ratio": 0.02,
     "move_steps_limit": None,
+    "feed_count": None,
+    "feed_zone": 0.00012,
 }
 # --- end of case parameters ---
 
@@ -182,7 +185,6 @@ for yc in (-d, W + d):
 x_substrate = -tb - 4.0 * d  # behind the blade's start only what the collapsing pile can reach
 substrate = {"positions": [], "radii": [], "rows": [], "x_end": x_substrate, "ids": []}
 if P["substrate"] == "rough":
-    import random
     substrate_rng = random.Random(1000003 * int(P["seed"]) + 17)
     row_pitch = math.sqrt(3.0) * R
     y0 = substrate_rng.uniform(0.0, row_pitch)
@@ -271,8 +273,9 @@ state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": Non
          "peak_overlap_ratio": 0.0, "rolled_off": 0, "removed_behind_volume": 0.0, "max_speed_seen": 0.0, "status": None, "reason": "",
          "peak_overlap_by_phase": {}, "peak_overlap_free": 0.0, "peak_overlap_wedged": 0.0,
          "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start,
-         "phase_cost": {}, "phase_mark": None, "frozen": 0}
+         "phase_cost": {}, "phase_mark": None, "frozen": 0, "fed": 0}
 single_particle_ke_bound = 0.5 * mass * P["max_speed"] ** 2
+feed_rng = random.Random(2000003 * int(P["seed"]) + 29)  # where fed spheres drop (feed_heap)
 
 
 def spheres():
@@ -513,6 +516,39 @@ def freeze_behind(x_rear):
         substrate["ids"] = keep
 
 
+def feed_heap(x_rear):
+    """A heap fed from above (feed_count): while the blade moves, whenever fewer than feed_count
+    moving spheres are at or ahead of its rear face (the heap, and what is under the blade), the
+    missing ones are added in a drop zone feed_zone long just ahead of its front face, a sphere's
+    diameter above the heap's highest sphere there, on a lattice (1.1 d pitch, a seeded shuffle
+    and a small jitter, so no two overlap), moving with the blade. The heap the blade pushes then
+    stays the same size whatever the window's length: a preset changes what is measured, not the
+    pile. Added spheres are powder like the pile's: in every snapshot and volume count."""
+    ahead = [b for b in spheres() if b.dynamic and b.state.pos[0] >= x_rear]
+    deficit = int(P["feed_count"]) - len(ahead)
+    if deficit < max(1, int(W / d)):  # feed a row's worth at a time
+        return
+    front = x_rear + tb
+    zone_end = front + P["feed_zone"]
+    top = max([b.state.pos[2] for b in ahead if front - R <= b.state.pos[0] <= zone_end + R] or [h])
+    pitch = 1.1 * d
+    xs = [front + R + 0.05 * d + i * pitch for i in range(max(1, int((P["feed_zone"] - d) / pitch) + 1))]
+    ys = [R + 0.05 * d + j * pitch for j in range(max(1, int((W - d - 0.1 * d) / pitch) + 1))]
+    placed, layer = 0, 0
+    while placed < deficit:
+        zc = top + d + R + layer * pitch
+        slots = [(x, y) for x in xs for y in ys]
+        feed_rng.shuffle(slots)
+        for x, y in slots[:deficit - placed]:
+            centre = (x + feed_rng.uniform(-0.04, 0.04) * d, y + feed_rng.uniform(-0.04, 0.04) * d, zc)
+            bid = O.bodies.append(utils.sphere(centre, R, material=frict, mask=POWDER_MASK))
+            O.bodies[bid].state.vel = (P["blade_speed"], 0, 0)
+            sphere_ids.append(bid)
+            placed += 1
+        layer += 1
+    state["fed"] += placed
+
+
 def start_phase(name):
     close_phase_cost()
     state["phase_times"][state["phase"] + "_end"] = O.time
@@ -554,6 +590,8 @@ def control():
             return
         if P.get("freeze_behind_d") is not None and O.iter % (10 * int(P["control_every"])) == 0:
             freeze_behind(x)
+        if P.get("feed_count"):
+            feed_heap(x)
         if P["substrate"] == "rough" and x + tb + L + P["substrate_ahead"] * d > substrate["x_end"]:
             extend_substrate(x + tb + L + P["substrate_ahead"] * d + 10.0 * d)
         if "window_start" not in state["snapshots"]:
@@ -639,6 +677,7 @@ raw = {
     "behind_series": state["behind_series"],
     "phase_cost": state["phase_cost"],
     "frozen_particles": state["frozen"],
+    "fed_particles": state["fed"],
     "snapshots": state["snapshots"],
 }
 write_atomically(out_path, raw)
