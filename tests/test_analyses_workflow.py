@@ -16,9 +16,12 @@ SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
     "ranges": {"d_um": {"min": 40, "max": 50}, "f": {"min": 0.3, "max": 0.45}},
     "points": {"named": {"demo": {"f": 0.3, "d_um": 45.0, "h_um": 65.0, "v_mm_s": 10.0}}},
     "pictures": {"cases": ["demo"], "vtk": ["demo"]},
-    "surrogate": {"neurons": [2, 4], "seeds": [0, 1, 2], "cv_folds": 3, "gp_restarts": 0, "ensemble_members": 2},
+    # the surrogate's validation at its smallest that still chooses inside the folds (two MLP
+    # penalties): one repeat of 3 folds (the shipped 3 x 5 with 12 MLP settings took 115 s here)
+    "surrogate": {"neurons": [2, 4], "seeds": [0, 1, 2], "cv_folds": 3, "cv_repeats": 1, "gp_restarts": 0,
+                  "ensemble_members": 2, "mlp_sizes": [4], "mlp_alphas": [0.1, 1.0]},
     "convergence": {"sampling_study": {"seeds": 2, "k_max": 4}},
-    "maps": {"sobol_n": 128, "machine": {"n_h": 3, "n_v": 3}},
+    "maps": {"sobol_n": 128, "sobol_draws": 8, "machine": {"n_h": 3, "n_v": 3}},
     # 10 cases: the surrogate's 3-fold validation needs 8 usable, and a smoke case may be flagged
     # (and a tolerance no smoke run reaches: the loop runs to its budget)
     "converge": {"start": 4, "batch": 2, "k_consecutive": 3, "budget": 10,

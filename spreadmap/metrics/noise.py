@@ -18,8 +18,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pandas as pd
-from scipy import stats
+
+# pandas and scipy.stats are imported where they are used: a case's metrics (scripts/case_metrics.py,
+# run once per case) need neither, and importing them costs ~2.5 s per case
 
 
 def counting_sd(n: float, per_sphere: float, c: float) -> float:
@@ -74,6 +75,8 @@ def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name
     left out. For PD the box is the window (the published study's): N_pd = PD x h x W x window / v.
     A table with the cases' own count (`n_passed`, windows sized by a precision target) uses the
     cell's mean count as N for both (the deposit holds what passed), and needs no presets."""
+    import pandas as pd
+    from scipy import stats
     ok = cases[(cases["status"] == "ok") & ~cases.get("flagged", pd.Series(False, index=cases.index)).fillna(False).astype(bool)]
     rows = []
     for key, cell in ok.groupby(list(group)):
@@ -101,6 +104,7 @@ def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name
 def pooled_constant(cells: pd.DataFrame, name: str, level: float = 0.9) -> tuple[float, float, float]:
     """c pooled over cells (root of the dof-weighted mean of c^2: the pooled relative variance x N)
     with its `level` chi-square interval."""
+    from scipy import stats
     dof = (cells["seeds"] - 1).to_numpy(float)
     c2 = cells[f"c_{name}"].to_numpy(float) ** 2
     total = dof.sum()
@@ -119,6 +123,7 @@ def calibration_factors(table: pd.DataFrame, calibration: list[dict] | None, tar
     target (a region is h/d from `h_over_d_from`, inclusive, to below `h_over_d_below`, a bound
     left out being open; it applies to the targets it lists under `targets`, to every one if it
     lists none), 1 outside every such region."""
+    import pandas as pd
     factors = np.ones(len(table))
     if not calibration or table.empty:
         return factors
@@ -140,6 +145,7 @@ def calibrated_noise(table: pd.DataFrame, calibration: list[dict] | None) -> pd.
     flow comes in bursts the counting law does not see). The measured values are left as they
     are; every analysis that weighs cases by their noise (the loop's criteria and model, the
     surrogate, the maps) reads the calibrated SDs."""
+    import pandas as pd
     out = table.copy()
     for col in NOISE_SD_COLUMNS:
         if col in out.columns:
