@@ -29,7 +29,7 @@ from spreadmap.config import load  # noqa: E402
 from spreadmap.convergence import replay  # noqa: E402
 from spreadmap.convergence.cost import fit_law  # noqa: E402
 from spreadmap.files import atomic_path, write_text_atomically  # noqa: E402
-from spreadmap.metrics.noise import calibrated_noise  # noqa: E402
+from spreadmap.noise_law.apply import case_noise  # noqa: E402
 
 PUBLISHED = ["cases_converge.csv", "cases_lds.csv", "cases_lattice.csv", "cases_heldout.csv", "cases_heldout2.csv"]
 _WORLD = None
@@ -111,7 +111,10 @@ def main(argv=None) -> int:
     if not world_path.exists():
         published = pd.concat(tables, ignore_index=True).drop_duplicates("case_id")
         published = published[published["preset"].astype(str) == "default"]
-        published = calibrated_noise(published, config.get("noise_calibration", []))
+        # each case's noise as the workflow weighs it: MFR's and PD's from the fitted noise law
+        # (config noise_model, docs/noise), the layer measures' from the bands
+        published = case_noise(published, config.get("noise_model"), config.get("noise_calibration", []),
+                               config["metrics"]["counting_noise_c"])
         t0 = time.time()
         world = replay.build_world(published, config, law)
         print(f"truth fitted in {time.time() - t0:.0f} s: {world.notes[0]}")
