@@ -199,4 +199,5 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "freeze_speed_ratio": float(scene.get("freeze_speed_ratio", 0.02)),
         "feed_count": feed_count,
         "feed_zone": float(scene.get("feed_zone_d", 4.0)) * d,
+        "feed_offset": float(scene.get("feed_offset_d", 0.0)) * d,
     }

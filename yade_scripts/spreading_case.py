@@ -89,6 +89,7 @@ PARAMS = {
     "move_steps_limit": None,
     "feed_count": None,
     "feed_zone": 0.00012,
+    "feed_offset": 0.0,
 }
 # --- end of case parameters ---
 
@@ -519,28 +520,30 @@ def freeze_behind(x_rear):
 def feed_heap(x_rear):
     """A heap fed from above (feed_count): while the blade moves, whenever fewer than feed_count
     moving spheres are at or ahead of its rear face (the heap, and what is under the blade), the
-    missing ones are added in a drop zone feed_zone long just ahead of its front face, a sphere's
-    diameter above the heap's highest sphere there, on a lattice (1.1 d pitch, a seeded shuffle
-    and a small jitter, so no two overlap), moving with the blade. The heap the blade pushes then
-    stays the same size whatever the window's length: a preset changes what is measured, not the
-    pile. Added spheres are powder like the pile's: in every snapshot and volume count."""
+    missing ones are added in a drop zone feed_zone long that starts feed_offset ahead of the
+    blade's front face, on a lattice of columns along x and rows along y (1.1 d pitch, a seeded
+    shuffle and a jitter of 0.04 d): in each column, 1.05 d above the highest sphere centre within
+    1.1 d of it in x (so a new sphere overlaps nothing, and falls less than a diameter onto the
+    heap's surface there), further layers 1.1 d apart, moving with the blade. The heap the blade
+    pushes then stays the same size whatever the window's length: a preset changes what is
+    measured, not the pile. Added spheres are powder like the pile's: in every snapshot and volume
+    count."""
     ahead = [b for b in spheres() if b.dynamic and b.state.pos[0] >= x_rear]
     deficit = int(P["feed_count"]) - len(ahead)
     if deficit < max(1, int(W / d)):  # feed a row's worth at a time
         return
-    front = x_rear + tb
-    zone_end = front + P["feed_zone"]
-    top = max([b.state.pos[2] for b in ahead if front - R <= b.state.pos[0] <= zone_end + R] or [h])
+    start = x_rear + tb + P.get("feed_offset", 0.0)
     pitch = 1.1 * d
-    xs = [front + R + 0.05 * d + i * pitch for i in range(max(1, int((P["feed_zone"] - d) / pitch) + 1))]
+    xs = [start + R + 0.05 * d + i * pitch for i in range(max(1, int((P["feed_zone"] - d) / pitch) + 1))]
     ys = [R + 0.05 * d + j * pitch for j in range(max(1, int((W - d - 0.1 * d) / pitch) + 1))]
+    tops = {x: max([b.state.pos[2] for b in ahead if abs(b.state.pos[0] - x) <= pitch] or [-R]) for x in xs}
     placed, layer = 0, 0
     while placed < deficit:
-        zc = top + d + R + layer * pitch
         slots = [(x, y) for x in xs for y in ys]
         feed_rng.shuffle(slots)
         for x, y in slots[:deficit - placed]:
-            centre = (x + feed_rng.uniform(-0.04, 0.04) * d, y + feed_rng.uniform(-0.04, 0.04) * d, zc)
+            centre = (x + feed_rng.uniform(-0.04, 0.04) * d, y + feed_rng.uniform(-0.04, 0.04) * d,
+                      tops[x] + 1.05 * d + layer * pitch)
             bid = O.bodies.append(utils.sphere(centre, R, material=frict, mask=POWDER_MASK))
             O.bodies[bid].state.vel = (P["blade_speed"], 0, 0)
             sphere_ids.append(bid)
