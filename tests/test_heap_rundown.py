@@ -70,7 +70,8 @@ def test_heap_volume_against_monte_carlo():
     got = heap_volume(snap(centres, rear, radii))
     n = 20_000
     u = rng.normal(size=(len(centres), n, 3))
-    u *= rng.uniform(size=(len(centres), n, 1)) ** (1 / 3) / np.linalg.norm(u, axis=2, keepdims=True) * radii[:, None, None]
+    u *= rng.uniform(size=(len(centres), n, 1)) ** (1 / 3) / np.linalg.norm(u, axis=2, keepdims=True)
+    u *= radii[:, None, None]
     share = np.mean(centres[:, None, 0] + u[..., 0] >= rear, axis=1)
     balls = 4 / 3 * math.pi * radii ** 3
     estimate = float(np.sum(balls * share))
@@ -110,7 +111,8 @@ def record(heap_end_spheres=36, heap_start_spheres=72, status="ok"):
            "substrate": {"positions": [[x * D, y * D, -0.5 * D] for x in range(30) for y in range(4)],
                          "radii": [R] * 120}}
     if status == "ok":
-        raw["snapshots"] = {"window_start": snap(np.array(start) * D, 10 * D), "window_end": snap(np.array(end) * D, 20 * D)}
+        raw["snapshots"] = {"window_start": snap(np.array(start) * D, 10 * D),
+                            "window_end": snap(np.array(end) * D, 20 * D)}
     return raw
 
 
