@@ -102,7 +102,9 @@ ARMS = {
 CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_packing",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",
                 "peak_overlap_relax", "peak_overlap_move", "rolled_off_particles", "flow_trend", "flow_trend_z", "flagged",
-                "peak_overlap_free", "peak_overlap_wedged", "wedged"]
+                "peak_overlap_free", "peak_overlap_wedged", "wedged",
+                # the heap ahead of the blade at the window's start and end, in h^2 (empty in older rows)
+                "heap_start_h2", "heap_end_h2"]
 CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", "cpu_time", "wall_time",
                *CASE_COLUMNS, "case_dir"]
 

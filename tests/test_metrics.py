@@ -239,13 +239,16 @@ DIAM = 30e-6
 
 def raw_record(status="ok", overlap=0.001, escaped=0, layers=1, row_only=False):
     """A blade at 10 d then 20 d (gap 2 d, bed 4 d wide) over a simple cubic deposit (or a
-    single row of spheres along the middle of the bed), in metres."""
+    single row of spheres along the middle of the bed), in metres; ahead of the blade in both
+    snapshots a heap of 36 spheres in a simple cubic block 3 d long and high (36 (pi/6) d^3 /
+    (W h^2) = 1.18 h^2, above the run-down bound)."""
     d = DIAM
     layer = cubic_layer(0.0, 20.0, 4.0, layers)
     if row_only:
         layer = layer[np.isclose(layer[:, 1], 1.5) & np.isclose(layer[:, 2], 0.5)]
-    end = layer * d
-    start = end[end[:, 0] < 10.0 * d]
+    heap = cubic_layer(20.0, 23.0, 4.0, 3) * d
+    end = np.vstack([layer * d, heap])
+    start = np.vstack([layer[layer[:, 0] < 10.0] * d, heap])
     params = {"case_id": "x", "preset": "smoke", "point": {"f": 0.3, "d_um": 30.0, "h_um": 60.0, "v_mm_s": 10.0},
               "seed": 1, "diameter": d, "gap": 2 * d, "width": 4 * d, "blade_thickness": 2 * d, "time_step": 1e-7,
               "critical_time_step": 4e-7, "density_scale": 1000.0, "n_particles": len(end)}

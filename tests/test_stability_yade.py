@@ -38,9 +38,14 @@ def corner_runs(config, tmp_path_factory):
 def test_corner_case_is_stable(corner_runs, config, name):
     params, result, raw = corner_runs[name]
     assert result["outcome"] == "ok", (result, raw.get("reason"))
-    m = case_metrics(raw, config["regime"], config["stability"], config["metrics"])
+    # stable, not fed: the smoke pile is sized by h x the blade's travel (heap_reserve), not h^2: at
+    # h/d 7.5 the whole pile is 1.4 h^2 (scene_parameters) and is expected to end the window below
+    # the run-down bound (stability.min_heap_h2), which that flag reports; this test is about the
+    # steps, not the pile
+    m = case_metrics(raw, config["regime"], {**config["stability"], "min_heap_h2": None}, config["metrics"])
     print(name, {k: m[k] for k in ("mfr", "pd", "regime", "n_particles", "steps", "wall_time",
-                                   "peak_overlap_ratio", "max_speed", "final_ke_per_mgd", "rolled_off_particles")})
+                                   "peak_overlap_ratio", "max_speed", "final_ke_per_mgd", "rolled_off_particles",
+                                   "heap_start_h2", "heap_end_h2")})
     assert m["time_step_ratio"] == pytest.approx(config["presets"]["smoke"]["dt_factor"])
     assert m["escaped_particles"] == 0  # nothing through a wall or the floor
     # overlaps stay small (rigid-particle limit): below 3 % R, well inside the 5 % R flag. (Below 2 %

@@ -1,18 +1,21 @@
 """Reduce one case's raw YADE output to the results table's row.
 
-flow    MFR (volume across the blade's rear plane, exact caps) and PD (the study's box fraction)
+flow    MFR (volume across the blade's rear plane, exact caps), PD (the study's box fraction) and
+        the heap ahead of the blade (heap_h2: what is left to feed the flow, in h^2)
 layer   layer quality: packing within the layer's own thickness, coverage, roughness, thickness
 noise   the case's own noise estimate (counting statistics; batch means within the case)
 regime  the regime rule (scalars or arrays: DEM cases and surrogate predictions alike)
 case    case_metrics: all of it plus the diagnostics and the stability flags
 """
-from .case import NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure, powder
-from .flow import layer_density, mass_flow_ratio, measured_span, passed_volume, sphere_volume, window_passed_volume
+from .case import MIN_HEAP_H2, NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure
+from .flow import (heap_h2, heap_volume, layer_density, mass_flow_ratio, measured_span, passed_volume, powder,
+                   sphere_volume, window_passed_volume)
 from .layer import layer_quality, upper_envelope
 from .noise import batch_means_sd, counting_constant, counting_sd, flow_trend, pooled_constant
 from .regime import REGIMES, RULE_KEYS, classify, regime_probabilities
 
-__all__ = ["NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "batch_means_sd", "case_metrics", "classify",
-           "counting_constant", "counting_sd", "flow_trend", "layer_density", "layer_quality", "mass_flow_ratio", "measure",
-           "measured_span", "passed_volume", "pooled_constant", "powder", "regime_probabilities", "sphere_volume", "upper_envelope",
+__all__ = ["MIN_HEAP_H2", "NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "batch_means_sd",
+           "case_metrics", "classify", "counting_constant", "counting_sd", "flow_trend", "heap_h2", "heap_volume",
+           "layer_density", "layer_quality", "mass_flow_ratio", "measure", "measured_span", "passed_volume",
+           "pooled_constant", "powder", "regime_probabilities", "sphere_volume", "upper_envelope",
            "window_passed_volume"]

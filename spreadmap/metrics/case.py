@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..scene import DENSEST_PACKING
-from .flow import layer_density, mass_flow_ratio, measured_span, sphere_volume, window_passed_volume
+from .flow import heap_h2, layer_density, mass_flow_ratio, measured_span, powder, sphere_volume, window_passed_volume
 from .layer import layer_quality
 from .noise import batch_means_sd, counting_sd, flow_trend
 from .regime import classify
@@ -19,15 +19,15 @@ PHASES = ("settle", "relax", "move")  # the phases of the scene, in order (yade_
 NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_packing", "coverage",
                "roughness_d", "thickness_ratio", "flow_trend", "flow_trend_z", "peak_overlap_free",
                "peak_overlap_wedged", "wedged", "layer_packing_sd", "coverage_sd", "roughness_d_sd",
-               "thickness_ratio_sd")
+               "thickness_ratio_sd",
+               # the heap ahead of the blade at the window's start and end, in h^2 (issue 32)
+               "heap_start_h2", "heap_end_h2")
 LAYER_BLOCK_D = 2.0  # default block length (in d) of the layer measures' jackknife noise (.layer)
 SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batches", "surface_grid_d")
-
-
-def powder(snapshot: dict) -> tuple[np.ndarray, np.ndarray]:
-    """Positions (n, 3) and radii (n,) of the spheres of a snapshot: the powder (a rough
-    substrate's fixed spheres are recorded apart, in the raw record's `substrate`)."""
-    return np.asarray(snapshot["positions"], float).reshape(-1, 3), np.asarray(snapshot["radii"], float)
+# stability.min_heap_h2's default (schemas/config.schema.yaml; docs/guide/01-model.md, "Metrics"):
+# sound shipped cases end their window with 0.97 h^2 or more ahead of the blade (98 main-job
+# cases, h/d 1.1-7.1), piles that ran down with ~0.2-0.5 h^2 (estimated)
+MIN_HEAP_H2 = 0.7
 
 
 def _powder_snapshot(snapshot: dict) -> dict:
@@ -72,6 +72,9 @@ def measure(raw: dict, settings: dict) -> dict:
     out["coverage"], out["coverage_sd"] = layer["coverage"], layer["coverage_sd"]
     out["roughness_d"], out["roughness_d_sd"] = layer["roughness"] / d, layer["roughness_sd"] / d
     out["thickness_ratio"], out["thickness_ratio_sd"] = layer["thickness"] / gap, layer["thickness_sd"] / gap
+    # what is left ahead of the blade to feed the flow: a pile that ran down before the window, or
+    # is nearly gone at its end, shows here even when the flow has no trend within the window
+    out["heap_start_h2"], out["heap_end_h2"] = heap_h2(s1, gap, width), heap_h2(s2, gap, width)
     return out
 
 
@@ -145,6 +148,10 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
     z_max = stability.get("max_flow_decline_z", 3.0)
     if z_max is not None and new["flow_trend_z"] < -z_max:  # nan (no series) compares False
         flags.append(f"flow fell by {-new['flow_trend']:.0%} over the window ({new['flow_trend_z']:.1f} SE): "
+                     f"the pile ran down")
+    heap_min = stability.get("min_heap_h2", MIN_HEAP_H2)
+    if heap_min is not None and new["heap_end_h2"] < heap_min:  # nan (a failed case) compares False
+        flags.append(f"the heap ahead of the blade fell to {new['heap_end_h2']:.2f} h^2 (< {heap_min:g} h^2): "
                      f"the pile ran down")
     if out["escaped_particles"] > stability["max_escaped"]:
         flags.append(f"{out['escaped_particles']} spheres escaped the box")

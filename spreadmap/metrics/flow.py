@@ -9,6 +9,9 @@ PD:  solid fraction of the deposited layer at the end of the window in a box fro
      start's blade rear face to a clearance behind the end's rear face (the material still in and
      just behind the gap is not yet a layer), full bed width, height h; spheres counted by their
      exact intersection volume with the box. The box must stay at least one blade thickness long.
+Heap: the powder at or ahead of the blade's rear face (the heap the blade pushes and what lies
+     under the blade), the exact part of each sphere ahead of the face, as a cross-section in h^2
+     (volume / (W h^2)): what is left to feed the flow under the blade.
 """
 from __future__ import annotations
 
@@ -23,13 +26,32 @@ def sphere_volume(diameter: float) -> float:
     return math.pi * diameter ** 3 / 6.0
 
 
+def powder(snapshot: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (n, 3) and radii (n,) of the spheres of a snapshot: the powder (a rough
+    substrate's fixed spheres are recorded apart, in the raw record's `substrate`)."""
+    return np.asarray(snapshot["positions"], float).reshape(-1, 3), np.asarray(snapshot["radii"], float)
+
+
 def passed_volume(snapshot: dict) -> float:
     """Volume behind the blade's rear face at a snapshot: the part of every sphere with x below
     the face (exact caps), plus the volume removed earlier behind the blade."""
-    positions = np.asarray(snapshot["positions"], float).reshape(-1, 3)
-    radii = np.asarray(snapshot["radii"], float)
+    positions, radii = powder(snapshot)
     behind = sphere_volume_below(positions[:, 0], radii, float(snapshot["blade_rear_x"]))
     return float(np.sum(behind)) + float(snapshot.get("removed_behind_volume", 0.0))
+
+
+def heap_volume(snapshot: dict) -> float:
+    """Volume at or ahead of the blade's rear face at a snapshot: the part of every sphere of the
+    powder with x above the face (exact caps, the axis mirrored rather than the part behind taken
+    from the whole sphere). A rough substrate is not in the snapshot (the raw record's
+    `substrate`); the deposit, frozen or not, lies behind the face."""
+    positions, radii = powder(snapshot)
+    return float(np.sum(sphere_volume_below(-positions[:, 0], radii, -float(snapshot["blade_rear_x"]))))
+
+
+def heap_h2(snapshot: dict, gap: float, width: float) -> float:
+    """The heap ahead of the blade (heap_volume) as a cross-section in units of h^2: volume / (W h^2)."""
+    return heap_volume(snapshot) / (width * gap * gap)
 
 
 def window_passed_volume(start: dict, end: dict) -> float:
