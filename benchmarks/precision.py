@@ -93,6 +93,9 @@ ARMS = {
     # passes before the window plus the standing reserve, spheres are added ahead of the blade
     # whenever the heap falls below that reserve; the window's length no longer sizes the pile
     "fed": {"rev": None, "overrides": {"scene": {"fed_heap": True}}},
+    # its first variant (commit 76258bb): one drop height over the zone at the blade's front face,
+    # 1.5 d above the highest sphere there
+    "fed_v1": {"rev": "76258bb", "overrides": {"scene": {"fed_heap": True}}},
     # the same, the spheres dropped 3-7 d ahead of the blade's front face (on the heap's slope,
     # where a long pile's powder joins the heap) instead of at it
     "fed_ahead": {"rev": None, "overrides": {"scene": {"fed_heap": True, "feed_offset_d": 3}}},

@@ -17,7 +17,12 @@ from __future__ import annotations
 
 import math
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 # pandas and scipy.stats are imported where they are used: a case's metrics (scripts/case_metrics.py,
 # run once per case) need neither, and importing them costs ~2.5 s per case
