@@ -182,6 +182,25 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
     return lines
 
 
+def _verdict_words(low: float, high: float, level: float) -> str:
+    """The coverage interval's verdict as the summary says it (surrogate.validation.coverage_verdict)."""
+    from .surrogate.validation import coverage_verdict
+
+    words = {"too wide": f"the intervals are too wide (their coverage's CI lies above {100 * level:g} %)",
+             "too narrow": f"the intervals are too narrow (their coverage's CI lies below {100 * level:g} %)",
+             "consistent": f"consistent with {100 * level:g} %", "unknown": "coverage interval unknown"}
+    return words[coverage_verdict(float(low), float(high), float(level))]
+
+
+def _sd_verdict(r: dict, alpha: float = 0.05) -> str:
+    """What the held-out z^2 test says of the stated SDs, at level alpha (one-sided each way)."""
+    if float(r.get("p_sd_too_wide", float("nan"))) < alpha:
+        return f"the stated SDs are too large (intervals too wide; p < {alpha:g})"
+    if float(r.get("p_sd_right", float("nan"))) < alpha:
+        return f"the stated SDs are too small (intervals too narrow; p < {alpha:g})"
+    return f"the stated SDs are consistent (neither p < {alpha:g})"
+
+
 def _surrogate(study: Path) -> list[str]:
     lines = ["## The surrogate against the noise"]
     metrics = _read_csv(study / "surrogate" / "surrogate_metrics.csv")
@@ -192,7 +211,8 @@ def _surrogate(study: Path) -> list[str]:
                      f"{r['rmse']:.4f} (interval {r['rmse_low']:.4f}-{r['rmse_high']:.4f}) = {r['rmse_over_noise']:.2f}x "
                      f"the noise SD {r['noise_sd']:.4f}; {100 * r['level']:g} % intervals cover "
                      f"{100 * r['coverage']:.0f} % ({100 * r['coverage_low']:.0f}-{100 * r['coverage_high']:.0f} %) "
-                     f"of {r['n_predictions']} predictions of {r['n_cases']} cases")
+                     f"of {r['n_predictions']} predictions of {r['n_cases']} cases: "
+                     f"{_verdict_words(r['coverage_low'], r['coverage_high'], r['level'])}")
     lines += _intervals_by_band(study, metrics)
     mlp = _read_csv(study / "surrogate" / "surrogate_r2_vs_neurons.csv")
     if mlp is not None:
@@ -256,10 +276,11 @@ def _heldout_score(folder: Path) -> list[str] | None:
     for r in json.loads(path.read_text()):
         lines.append(f"- {r['target']}: {r['inside']} of {r['points']} points' seed means inside their "
                      f"{100 * r['level']:g} % prediction intervals (coverage {r['coverage']:.2f}, 95 % CI "
-                     f"{r['coverage_low']:.2f}-{r['coverage_high']:.2f}); RMSE {r['rmse']:.4f} against "
+                     f"{r['coverage_low']:.2f}-{r['coverage_high']:.2f}: "
+                     f"{_verdict_words(r['coverage_low'], r['coverage_high'], r['level'])}); RMSE {r['rmse']:.4f} against "
                      f"{r['rmse_expected']:.4f} expected from the stated SDs (mean z^2 {r['mean_z2']:.2f}, "
                      f"p = {r['p_sd_right']:.2g} for 'the SDs are too small', "
-                     f"{r.get('p_sd_too_wide', float('nan')):.2g} for 'too large')")
+                     f"{r.get('p_sd_too_wide', float('nan')):.2g} for 'too large'): {_sd_verdict(r)}")
     table = _read_csv(folder / "score.csv")
     if table is not None and "inside" in table:
         outside = table[~table["inside"].astype(bool)]

@@ -172,6 +172,9 @@ def test_the_summary_states_the_map_models_intervals_by_h_over_d(tmp_path):
     assert ("1.5-2: 1 cases, error 0.0100 against the cases' noise 0.0150, interval SD 0.0200 (the model's 0.0100), "
             "mean z^2 0.25, 100 % inside") in line
     assert ">= 3: 1 cases, error 0.0100" in line and "0-1.5" not in line and "left out" not in line
+    # the coverage line says what its interval supports: 100 % (100-100 %) of 95 % intervals is too wide
+    line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp, the maps): CV RMSE"))
+    assert line.endswith("the intervals are too wide (their coverage's CI lies above 95 %)"), line
     # a case of the training table in no published cases table (the main job trains on more): left out, said so
     pd.DataFrame(rows + [{**rows[0], "case_id": "z"}]).to_csv(tmp_path / "surrogate" / "surrogate_parity.csv", index=False)
     line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp), its intervals"))
@@ -283,3 +286,5 @@ def test_a_second_heldout_check_is_reported_beside_the_first(tmp_path):
     second = summary_markdown(tmp_path, RANGES).split("- The second check, of the shipped surrogate")[1]
     assert f"  - mfr: {inside_second} of 12 points' seed means inside" in second
     assert second.count("  - outside: ") == 12 - inside_second
+    # predictions 2 SDs off: the z^2 test says the stated SDs are too small, in words
+    assert "the stated SDs are too small (intervals too narrow; p < 0.05)" in second.splitlines()[1]

@@ -382,3 +382,23 @@ def test_layer_quality_columns_become_targets_with_or_without_their_sd():
     assert v.loc[("roughness_d", "gp"), "noise_source"] == "model"
     assert v.loc[("coverage", "gp"), "noise_sd"] == pytest.approx(0.02)
     assert maps.choose_machine_y(df, r.model.targets)[0] == "coverage"
+
+
+def test_coverage_verdict_reads_the_interval_not_the_point():
+    """Coverage whose interval excludes the nominal level is too wide or too narrow, not a success:
+    the study's 97.5 % (95.7-98.9) of 95 % intervals is too wide; an interval holding 95 % is
+    consistent whatever its point value; the verdict reaches the validation table."""
+    from spreadmap.surrogate.validation import coverage_verdict
+
+    assert coverage_verdict(0.957, 0.989, 0.95) == "too wide"
+    assert coverage_verdict(0.80, 0.93, 0.95) == "too narrow"
+    assert coverage_verdict(0.90, 0.99, 0.95) == coverage_verdict(0.949, 0.951, 0.95) == "consistent"
+    assert coverage_verdict(float("nan"), 0.99, 0.95) == "unknown"
+    # an independent check: 100 cases all inside their 95 % intervals; the exact binomial (Clopper-
+    # Pearson) 95 % interval of 100/100 is 0.964-1.0, above 0.95: too wide
+    from scipy.stats import binomtest
+
+    ci = binomtest(100, 100).proportion_ci(0.95)
+    assert coverage_verdict(ci.low, ci.high, 0.95) == "too wide"
+    ci = binomtest(95, 100).proportion_ci(0.95)
+    assert coverage_verdict(ci.low, ci.high, 0.95) == "consistent"

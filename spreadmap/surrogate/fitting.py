@@ -89,7 +89,8 @@ def fit_surrogate(df: pd.DataFrame, config=None, source_path=None, ranges=None, 
             val_rows.append({"target": t, "model": kind, **s})
             oof_parts.append(oof.assign(target=t, model=kind))
             log(f"validated {kind} on {t}: RMSE {s['rmse']:.4g} [{s['rmse_low']:.4g}, {s['rmse_high']:.4g}] "
-                f"vs noise SD {s['noise_sd']:.4g} ({s['noise_source']}); coverage {s['coverage']:.3f}")
+                f"vs noise SD {s['noise_sd']:.4g} ({s['noise_source']}); coverage {s['coverage']:.3f} "
+                f"[{s['coverage_low']:.3f}, {s['coverage_high']:.3f}] of {s['level']:g}: {s['coverage_verdict']}")
     val = pd.DataFrame(val_rows)
     chosen = {}
     for t in targets:

@@ -62,6 +62,16 @@ def _boot_interval(values: np.ndarray, stat, seed: int, level: float = 0.95) -> 
     return float(np.quantile(b, a)), float(np.quantile(b, 1 - a))
 
 
+def coverage_verdict(low: float, high: float, level: float) -> str:
+    """What a coverage interval (low, high) says of intervals meant to hold `level`: "too wide"
+    when its whole interval lies above the level (the intervals cover more than they claim),
+    "too narrow" when it lies below, "consistent" when it contains the level, "unknown" when
+    either end is missing."""
+    if not (np.isfinite(low) and np.isfinite(high)):
+        return "unknown"
+    return "too wide" if low > level else "too narrow" if high < level else "consistent"
+
+
 def summarise(oof: pd.DataFrame, level: float, seed: int = 0) -> dict:
     """The validation numbers of one (model, target) from its out-of-fold predictions."""
     z = stats.norm.ppf(0.5 + level / 2)
@@ -90,6 +100,7 @@ def summarise(oof: pd.DataFrame, level: float, seed: int = 0) -> dict:
         "r2_corrected": 1 - (mse - noise_var) / (var_y - noise_var) if var_y > noise_var else np.nan,
         "level": level, "coverage": cov, "coverage_low": cov_lo, "coverage_high": cov_hi,
         "half_width": float(z * oof["run_sd"].mean()),
+        "coverage_verdict": coverage_verdict(cov_lo, cov_hi, level),
     }
 
 
