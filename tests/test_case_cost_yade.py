@@ -74,9 +74,9 @@ def test_fed_heap_pile_holds_only_what_passes_before_the_window_and_the_reserve(
     of the pile's height), and the heap it is fed to holds the reserve (pile_reserve x h^2) plus
     the gap under the blade, in spheres at the packing guess; the window's length is unchanged."""
     point = {"f": 0.3, "d_um": 30.0, "h_um": 65.0, "v_mm_s": 10.0}
-    fed_cfg = copy.deepcopy(config)
-    fed_cfg["scene"]["fed_heap"] = True
-    plain = case_params(config, point, "default")
+    fed_cfg, plain_cfg = copy.deepcopy(config), copy.deepcopy(config)
+    fed_cfg["scene"]["fed_heap"], plain_cfg["scene"]["fed_heap"] = True, False
+    plain = case_params(plain_cfg, point, "default")
     fed = case_params(fed_cfg, point, "default")
     assert plain["feed_count"] is None
     d, h, w = 30e-6, 65e-6, plain["width"]

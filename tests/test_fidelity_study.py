@@ -64,15 +64,26 @@ def test_a_knob_preset_changes_only_what_its_knob_drives(shipped):
     assert dt["n_particles"] == base["n_particles"]
     wide = scene_parameters(point, "default_width_d_16", cfg, "x")
     assert wide["width"] == pytest.approx(16 / 10 * base["width"])
-    # the pile holds what must pass: a wider bed makes it shorter (the window's spheres spread over
-    # the width); what passes in the transient and the standing reserve (scene.pile_reserve x h^2
-    # per unit width) do not shrink: a pile of fixed length would hold 16/10 as many spheres
-    assert wide["pile_length"] < base["pile_length"]
-    assert base["n_particles"] < wide["n_particles"] < 16 / 10 * base["n_particles"]
+    # the pile holds what must pass before it is fed: a full pile (no scene.fed_heap) holds the
+    # window's spheres too, so a wider bed makes it shorter (they spread over the width); what passes
+    # in the transient and the standing reserve (scene.pile_reserve x h^2 per unit width) do not
+    # shrink: a pile of fixed length would hold 16/10 as many spheres. A fed pile holds no window:
+    # its length does not depend on the width, its spheres grow as the width
+    if cfg["scene"]["fed_heap"]:
+        assert wide["pile_length"] == pytest.approx(base["pile_length"], rel=1e-12)
+        assert wide["n_particles"] == pytest.approx(16 / 10 * base["n_particles"], abs=1)
+        assert wide["feed_count"] == pytest.approx(16 / 10 * base["feed_count"], abs=1)
+    else:
+        assert wide["pile_length"] < base["pile_length"]
+        assert base["n_particles"] < wide["n_particles"] < 16 / 10 * base["n_particles"]
     reserve = cfg["scene"]["pile_reserve"] * point["h_um"] ** 2 / (point["h_um"] + 10 * point["d_um"]) * 1e-6
-    no_reserve = copy.deepcopy(cfg)
+    # (on a full pile: a fed pile without its reserve is shorter than the preset's minimum here)
+    full = copy.deepcopy(cfg)
+    full["scene"]["fed_heap"] = False
+    no_reserve = copy.deepcopy(full)
     no_reserve["scene"]["pile_reserve"] = 0.0
-    assert base["pile_length"] - scene_parameters(point, "default", no_reserve, "x")["pile_length"] == \
+    assert scene_parameters(point, "default", full, "x")["pile_length"] - \
+        scene_parameters(point, "default", no_reserve, "x")["pile_length"] == \
         pytest.approx(reserve, rel=1e-9)  # 4.7 h^2 / (h + heap): 1.8 d at this point
     precise = scene_parameters(point, "default_target_cv_0p015", cfg, "x")
     c = cfg["metrics"]["counting_noise_c"]
