@@ -95,6 +95,8 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     fed = bool(scene.get("fed_heap", False))
     if target is None:
         need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + (0.0 if fed else window) + blade)
+        if fed:  # the pile starts with the heap it will be fed to hold (a smaller one would be fed at once)
+            need += scene["pile_reserve"] * h * h * packing * heap / (h + heap)
         window_cap = window
         window_expected = window
     else:
