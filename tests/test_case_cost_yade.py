@@ -17,6 +17,29 @@ pytestmark = pytest.mark.yade
 POINT = {"f": 0.3, "d_um": 45.0, "h_um": 55.0, "v_mm_s": 10.0}  # h/d 1.2: a long smoke window
 
 
+def run_pair(config: dict, preset: str, key: str, values: tuple, tmp_path) -> list:
+    """The same case (POINT, same seed) with config's scene.<key> set to each of two values, run
+    side by side: [(result, raw), (result, raw)]."""
+    jobs = []
+    for i, value in enumerate(values):
+        cfg = copy.deepcopy(config)
+        cfg["scene"][key] = value
+        (tmp_path / f"run{i}").mkdir()
+        jobs.append((case_params(cfg, POINT, preset), tmp_path / f"run{i}"))
+    return run_many(jobs)
+
+
+def assert_same_measurement(raw_plain: dict, raw_other: dict, config: dict) -> None:
+    """The other run of the same case reads MFR and PD within 3 recorded SDs (both runs' SDs in
+    quadrature) of the plain run, and is not flagged."""
+    plain, other = (case_metrics(raw, config["regime"], config["stability"], config["metrics"])
+                    for raw in (raw_plain, raw_other))
+    for target in ("mfr", "pd"):
+        sd = math.hypot(plain[f"{target}_sd"], other[f"{target}_sd"])
+        assert np.isfinite(sd) and abs(plain[target] - other[target]) < 3.0 * sd, (target, plain[target], other[target], sd)
+    assert not other["flagged"], other["flag_reason"]
+
+
 def test_phase_cost_splits_the_steps_and_timing_names_every_engine(config, tmp_path):
     params = case_params(config, POINT, "smoke", timing=True)
     (result, raw), = run_many([(params, tmp_path)])
@@ -43,13 +66,7 @@ def test_frozen_deposit_keeps_every_sphere_and_the_measurement(config, tmp_path)
     """The same case (same seed) with and without freezing the deposit 2 d behind the blade: the
     frozen run freezes spheres, all of them behind that line and at rest in the end snapshot,
     loses none from the record, and reads MFR and PD within 3 recorded SDs of the plain run."""
-    jobs = []
-    for name, freeze in (("plain", None), ("frozen", 2.0)):
-        cfg = copy.deepcopy(config)
-        cfg["scene"]["freeze_behind_d"] = freeze
-        (tmp_path / name).mkdir()
-        jobs.append((case_params(cfg, POINT, "smoke"), tmp_path / name))
-    (r_plain, raw_plain), (r_frozen, raw_frozen) = run_many(jobs)
+    (r_plain, raw_plain), (r_frozen, raw_frozen) = run_pair(config, "smoke", "freeze_behind_d", (None, 2.0), tmp_path)
     assert r_plain["outcome"] == r_frozen["outcome"] == "ok"
     assert raw_plain["frozen_particles"] == 0 < raw_frozen["frozen_particles"]
     d = raw_frozen["params"]["diameter"]
@@ -59,13 +76,7 @@ def test_frozen_deposit_keeps_every_sphere_and_the_measurement(config, tmp_path)
     at_rest = [p for p, v in zip(end["positions"], end["velocities"]) if not any(v)]
     assert len(at_rest) >= raw_frozen["frozen_particles"]
     assert all(p[0] < end["blade_rear_x"] - 2.0 * d for p in at_rest)
-    metrics = {name: case_metrics(raw, config["regime"], config["stability"], config["metrics"])
-               for name, raw in (("plain", raw_plain), ("frozen", raw_frozen))}
-    for target in ("mfr", "pd"):
-        a, b = metrics["plain"], metrics["frozen"]
-        sd = math.hypot(a[f"{target}_sd"], b[f"{target}_sd"])
-        assert np.isfinite(sd) and abs(a[target] - b[target]) < 3.0 * sd, (target, a[target], b[target], sd)
-    assert not metrics["frozen"]["flagged"], metrics["frozen"]["flag_reason"]
+    assert_same_measurement(raw_plain, raw_frozen, config)
 
 
 def test_fed_heap_pile_holds_only_what_passes_before_the_window_and_the_reserve(config):
@@ -98,13 +109,8 @@ def test_fed_heap_keeps_the_heap_every_sphere_and_the_measurement(config, tmp_pa
     some during the move, keeps every one in the record, holds the heap ahead of the blade near its
     size to the window's end, and reads MFR and PD within 3 recorded SDs of the plain run,
     unflagged (no overlap from the drop)."""
-    jobs = []
-    for name, fed in (("plain", False), ("fed", True)):
-        cfg = with_preset(config, "smoke_long", window_d=12, heap_height_d=5, pile_length_min_d=2)
-        cfg["scene"]["fed_heap"] = fed
-        (tmp_path / name).mkdir()
-        jobs.append((case_params(cfg, POINT, "smoke_long"), tmp_path / name))
-    (r_plain, raw_plain), (r_fed, raw_fed) = run_many(jobs)
+    long_window = with_preset(config, "smoke_long", window_d=12, heap_height_d=5, pile_length_min_d=2)
+    (r_plain, raw_plain), (r_fed, raw_fed) = run_pair(long_window, "smoke_long", "fed_heap", (False, True), tmp_path)
     assert r_plain["outcome"] == r_fed["outcome"] == "ok"
     assert raw_plain["fed_particles"] == 0 < raw_fed["fed_particles"]
     assert raw_fed["n_particles"] < raw_plain["n_particles"]
@@ -113,10 +119,4 @@ def test_fed_heap_keeps_the_heap_every_sphere_and_the_measurement(config, tmp_pa
     ahead = sum(1 for p in end["positions"] if p[0] >= end["blade_rear_x"])
     count, row = raw_fed["params"]["feed_count"], round(raw_fed["params"]["width"] / raw_fed["params"]["diameter"])
     assert count - 3 * row <= ahead <= count + 3 * row, (ahead, count)
-    metrics = {name: case_metrics(raw, config["regime"], config["stability"], config["metrics"])
-               for name, raw in (("plain", raw_plain), ("fed", raw_fed))}
-    for target in ("mfr", "pd"):
-        a, b = metrics["plain"], metrics["fed"]
-        sd = math.hypot(a[f"{target}_sd"], b[f"{target}_sd"])
-        assert np.isfinite(sd) and abs(a[target] - b[target]) < 3.0 * sd, (target, a[target], b[target], sd)
-    assert not metrics["fed"]["flagged"], metrics["fed"]["flag_reason"]
+    assert_same_measurement(raw_plain, raw_fed, config)

@@ -274,7 +274,7 @@ state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": Non
          "peak_overlap_ratio": 0.0, "rolled_off": 0, "removed_behind_volume": 0.0, "max_speed_seen": 0.0, "status": None, "reason": "",
          "peak_overlap_by_phase": {}, "peak_overlap_free": 0.0, "peak_overlap_wedged": 0.0,
          "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start,
-         "phase_cost": {}, "phase_mark": None, "frozen": 0, "fed": 0}
+         "phase_cost": {}, "phase_mark": None, "frozen": 0, "fed": 0, "feed_after": 0.0}
 single_particle_ke_bound = 0.5 * mass * P["max_speed"] ** 2
 feed_rng = random.Random(2000003 * int(P["seed"]) + 29)  # where fed spheres drop (feed_heap)
 
@@ -520,7 +520,8 @@ def freeze_behind(x_rear):
 def feed_heap(x_rear):
     """A heap fed from above (feed_count): while the blade moves, whenever fewer than feed_count
     moving spheres are at or ahead of its rear face (the heap, and what is under the blade), the
-    missing ones (at most two layers' worth per call, the rest at the next) are added in a drop
+    missing ones (at most two layers' worth per call, the next only once these have fallen onto
+    the heap) are added in a drop
     zone feed_zone long that starts feed_offset ahead of the blade's front face, on a lattice of
     columns along x and rows along y (1.1 d pitch, a seeded
     shuffle and a jitter of 0.04 d): in each column, 1.05 d above the highest sphere centre within
@@ -529,6 +530,8 @@ def feed_heap(x_rear):
     pushes then stays the same size whatever the window's length: a preset changes what is
     measured, not the pile. Added spheres are powder like the pile's: in every snapshot and volume
     count."""
+    if O.time < state["feed_after"]:  # the last spheres added are still falling onto the heap
+        return
     ahead = [b for b in spheres() if b.dynamic and b.state.pos[0] >= x_rear]
     deficit = int(P["feed_count"]) - len(ahead)
     if deficit < max(1, int(W / d)):  # feed a row's worth at a time
@@ -552,6 +555,10 @@ def feed_heap(x_rear):
             placed += 1
         layer += 1
     state["fed"] += placed
+    # the next spheres only once these have fallen their 1.05 d (and a layer more): new spheres are
+    # placed above the highest ones there, and stacked on spheres still in the air they would build
+    # a tower (a smoke case at h/d 7.5 with a deficit of hundreds built one 145 d tall)
+    state["feed_after"] = O.time + math.sqrt(2.0 * (1.05 + layer * 1.1) * d / P["gravity"])
 
 
 def start_phase(name):
