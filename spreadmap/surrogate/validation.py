@@ -67,9 +67,11 @@ def coverage_verdict(low: float, high: float, level: float) -> str:
     when its whole interval lies above the level (the intervals cover more than they claim),
     "too narrow" when it lies below, "consistent" when it contains the level, "unknown" when
     either end is missing."""
+    from ..noise_law.heldout import verdict  # the noise law's held-out check reads its intervals so
+
     if not (np.isfinite(low) and np.isfinite(high)):
         return "unknown"
-    return "too wide" if low > level else "too narrow" if high < level else "consistent"
+    return verdict(low, high, level, "too wide", "too narrow")
 
 
 def summarise(oof: pd.DataFrame, level: float, seed: int = 0) -> dict:
