@@ -521,10 +521,9 @@ def feed_heap(x_rear):
     """A heap fed from above (feed_count): while the blade moves, whenever fewer than feed_count
     moving spheres are at or ahead of its rear face (the heap, and what is under the blade), the
     missing ones (at most two layers' worth per call, the next only once these have fallen onto
-    the heap) are added in a drop
-    zone feed_zone long that starts feed_offset ahead of the blade's front face, on a lattice of
-    columns along x and rows along y (1.1 d pitch, a seeded
-    shuffle and a jitter of 0.04 d): in each column, 1.05 d above the highest sphere centre within
+    the heap) are added in a drop zone feed_zone long that starts feed_offset ahead of the blade's
+    front face, on a lattice of columns along x and rows along y (1.1 d pitch, a seeded shuffle
+    and a jitter of 0.04 d): in each column, 1.05 d above the highest sphere centre within
     1.1 d of it in x (so a new sphere overlaps nothing, and falls less than a diameter onto the
     heap's surface there), further layers 1.1 d apart, moving with the blade. The heap the blade
     pushes then stays the same size whatever the window's length: a preset changes what is
