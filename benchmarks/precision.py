@@ -99,6 +99,9 @@ ARMS = {
     # the same, the spheres dropped 3-7 d ahead of the blade's front face (on the heap's slope,
     # where a long pile's powder joins the heap) instead of at it
     "fed_ahead": {"rev": None, "overrides": {"scene": {"fed_heap": True, "feed_offset_d": 3}}},
+    # the fed heap with twice the standing reserve, at the corner: is 4.7 h^2 enough there?
+    "fed_2x": {"rev": None, "overrides": {"scene": {"fed_heap": True, "pile_reserve": 9.4}},
+               "points": ["fine_thick_corner"]},
     "reserve_1h": {"rev": None, "overrides": {"scene": {"pile_reserve": 2.33}}, "points": ["fine_thick_corner"]},
     "reserve_2h": {"rev": None, "overrides": {"scene": {"pile_reserve": 4.67}}, "points": ["fine_thick_corner"]},
 }
