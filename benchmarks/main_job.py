@@ -39,7 +39,9 @@ for _path in (ROOT, ROOT / "tests"):  # the package, and the tests' reader of dr
         sys.path.insert(0, str(_path))
 
 from dryrun import planned_jobs  # noqa: E402
+
 from spreadmap.machine import description_lines  # noqa: E402
+
 PROGRESS = re.compile(r"^\d+ of \d+ steps \(.*\) done")
 
 

@@ -7,9 +7,9 @@ import pandas as pd
 from spreadmap import convergence as cv
 from spreadmap.convergence import plots
 from spreadmap.design import TARGETS
-from spreadmap.table import usable
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
+from spreadmap.table import usable
 
 log_to(snakemake)  # noqa: F821
 

@@ -5,8 +5,8 @@ import pandas as pd
 
 from spreadmap import maps, sensitivity
 from spreadmap.logs import log_to
-from spreadmap.records import read_table
 from spreadmap.noise_law.apply import case_noise
+from spreadmap.records import read_table
 from spreadmap.surrogate import load_model
 from spreadmap.surrogate.settings import map_config
 

@@ -1,6 +1,6 @@
 """Snakemake entry: one results table (CSV) from per-case metrics, with the sweep/index labels."""
-from spreadmap.table import build_table, write_table
 from spreadmap.logs import log_to
+from spreadmap.table import build_table, write_table
 
 log_to(snakemake)  # noqa: F821
 

@@ -2,9 +2,9 @@
 import json
 from pathlib import Path
 
-from spreadmap.summary import run_summary, summary_text
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
+from spreadmap.summary import run_summary, summary_text
 
 log_to(snakemake)  # noqa: F821
 

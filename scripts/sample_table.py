@@ -1,9 +1,9 @@
 """Snakemake entry: write a sweep's sample table (the same points the workflow registered)."""
 import pandas as pd
 
+from spreadmap.logs import log_to
 from spreadmap.sampling import halton, lattice
 from spreadmap.table import write_table
-from spreadmap.logs import log_to
 
 log_to(snakemake)  # noqa: F821
 

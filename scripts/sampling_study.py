@@ -1,8 +1,8 @@
 """Snakemake entry: the DEM-free sampling-design study (LDS vs lattice vs random)."""
 from spreadmap.convergence import sampling_study
 from spreadmap.convergence.plots import plot_sampling_study
-from spreadmap.surrogate import load_model
 from spreadmap.logs import log_to
+from spreadmap.surrogate import load_model
 
 log_to(snakemake)  # noqa: F821
 

@@ -4,8 +4,8 @@ from pathlib import Path
 import pandas as pd
 
 from spreadmap.logs import log_to
-from spreadmap.records import read_table
 from spreadmap.noise_law.apply import case_noise
+from spreadmap.records import read_table
 from spreadmap.surrogate import fit_surrogate, save_model
 from spreadmap.surrogate.plots import plot_all
 

@@ -7,7 +7,6 @@ import pprint
 import re
 from pathlib import Path
 
-
 TEMPLATE = Path(__file__).resolve().parent.parent / "yade_scripts" / "spreading_case.py"
 _BLOCK = re.compile(r"(# --- case parameters.*?---\n)PARAMS = \{.*?\n\}\n(# --- end of case parameters ---)", re.S)
 

@@ -99,7 +99,7 @@ def _convergence(study: Path) -> list[str]:
                 lines.append(f"- The workflow's convergence summary: {ratio.get('text', '')}")
         stable = r.get("lds_case_by_case") or {}
         if stable.get("n_last"):
-            lines.append(f"- The study's rule case by case on the LDS (each case against the one before): "
+            lines.append("- The study's rule case by case on the LDS (each case against the one before): "
                          + (f"holds from N = {stable['stable_from']} on" if stable.get("stable_from")
                             else f"does not hold for good within {stable['n_last']} cases")
                          + (f" (first holds at N = {stable['first_holds']})." if stable.get("first_holds") else "."))

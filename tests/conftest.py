@@ -9,12 +9,12 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+from dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import case_id, rounded
-from dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
-from spreadmap.launcher import run_case
 from spreadmap.files import write_text_atomically
+from spreadmap.launcher import run_case
 from spreadmap.render import render
 from spreadmap.scene import scene_parameters
 
@@ -77,7 +77,6 @@ def make_workflow(tmp_path: Path, overrides: dict, drop: tuple = ()) -> Path:
     merged in and the top-level keys in `drop` removed."""
     import shutil
 
-    import yaml
 
     wf = tmp_path / "wf"
     wf.mkdir(exist_ok=True)

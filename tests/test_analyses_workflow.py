@@ -6,7 +6,6 @@ import json
 import re
 
 import pytest
-
 from conftest import FAST_SWEEP, deep_update, make_workflow, planned_jobs, snakemake, write_config
 
 pytestmark = pytest.mark.yade
@@ -125,8 +124,8 @@ def test_the_study_publishes_and_answers_from_a_finished_run(finished_run, tmp_p
     import sys
 
     import pandas as pd
-
     from conftest import ROOT
+
     from spreadmap.study_summary import NOT_YET
 
     out = tmp_path / "study"

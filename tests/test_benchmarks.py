@@ -11,11 +11,10 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import ROOT
 
 from spreadmap import design
 from spreadmap import surrogate as S
-
-from conftest import ROOT
 
 BENCH = ROOT / "benchmarks"
 PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv" / "bin" / "python").exists() else sys.executable

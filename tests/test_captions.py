@@ -6,9 +6,8 @@ import re
 from types import SimpleNamespace
 
 import pytest
-from jinja2 import Environment, StrictUndefined
-
 from conftest import ROOT
+from jinja2 import Environment, StrictUndefined
 
 CAPTIONS = sorted((ROOT / "rules" / "captions").glob("*.rst"))
 SURROGATE = {"parity", "r2_vs_neurons", "learning_curve"}  # the surrogate's own captions: tested with it

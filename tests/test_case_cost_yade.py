@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import case_params, run_many, with_preset
+
 from spreadmap.metrics import case_metrics
 
 pytestmark = pytest.mark.yade

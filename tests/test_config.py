@@ -3,10 +3,9 @@ import copy
 
 import pytest
 import yaml
+from conftest import ROOT, make_workflow, snakemake
 
 from spreadmap.config import ConfigError, validate
-
-from conftest import ROOT, make_workflow, snakemake
 
 
 @pytest.fixture()

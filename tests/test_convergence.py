@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from figure_text import pdf_text
 from scipy import stats
 
-from figure_text import pdf_text
 from spreadmap import convergence as cv
 from spreadmap.substrate import floor_label
 
@@ -358,7 +358,9 @@ def test_statistic_panels_are_scaled_to_the_partitions_not_the_first_few_cases()
 # ---------------------------------------------------------------------------------------------
 # the map model interface (a GP) and the map-level criteria, on functions with known truth
 # ---------------------------------------------------------------------------------------------
-from spreadmap.convergence import active, map_criteria as mc, model as mm, stepper  # noqa: E402
+from spreadmap.convergence import active, stepper  # noqa: E402
+from spreadmap.convergence import map_criteria as mc
+from spreadmap.convergence import model as mm
 from spreadmap.design import NAMES, to_physical, to_unit  # noqa: E402
 from spreadmap.sampling import halton, halton_unit  # noqa: E402
 

@@ -14,15 +14,15 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from scipy.stats import norm
-
 from conftest import ROOT
 from figure_text import pdf_text
+from scipy.stats import norm
+
 from spreadmap import config as spreadmap_config
 from spreadmap.decisions import DecisionError, decision_config, recommendations
-from spreadmap.decisions.figure import decision_figure
 from spreadmap.decisions.explorer import write_explorer
 from spreadmap.decisions.feasibility import powders_from_config
+from spreadmap.decisions.figure import decision_figure
 from spreadmap.substrate import floor_label
 
 SIGMA, NOISE = 0.01, 0.02            # model SD and a run's noise SD of coverage

@@ -12,9 +12,9 @@ import warnings
 
 import numpy as np
 import pytest
-
 from browser import Chromium
 from conftest import ROOT
+
 from spreadmap.decisions import decision_config
 from spreadmap.decisions.explorer import write_explorer
 from spreadmap.surrogate import load_model

@@ -26,10 +26,9 @@ import warnings
 
 import pandas as pd
 import pytest
-
 from conftest import ROOT, make_workflow, planned_jobs, snakemake
-from spreadmap.checksums import (PublishedFileError, check_folder, republish_if_listed, verified_bytes,
-                                 write_manifest)
+
+from spreadmap.checksums import PublishedFileError, check_folder, republish_if_listed, verified_bytes, write_manifest
 from spreadmap.launcher import finished_simulation
 from spreadmap.records import CorruptFileError, read_metrics, read_raw, read_table
 from spreadmap.restore import case_record, restore_cases, restore_steps

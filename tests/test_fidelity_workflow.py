@@ -8,10 +8,9 @@ import subprocess
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import FAST_SWEEP, deep_update, make_workflow, planned_jobs, snakemake
 
 from spreadmap.launcher import clean_environment, yade_executable
-
-from conftest import FAST_SWEEP, deep_update, make_workflow, planned_jobs, snakemake
 
 pytestmark = pytest.mark.yade
 

@@ -7,12 +7,11 @@ import math
 import numpy as np
 import pytest
 import yaml
+from conftest import ROOT
 
 from spreadmap.config import ConfigError, validate
 from spreadmap.metrics import MIN_HEAP_H2, NEW_COLUMNS, case_metrics, heap_h2, heap_volume, passed_volume
 from spreadmap.table import FLOOR_COLUMNS, LAST_COLUMNS, build_table
-
-from conftest import ROOT
 
 D = 30e-6  # sphere diameter, m
 R = 0.5 * D

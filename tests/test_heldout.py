@@ -104,6 +104,7 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
 
     import synthetic_cases as syn
     from conftest import ROOT
+
     from spreadmap.surrogate import fitting, saved_model
 
     train = syn.table(48, 0.07, seed=1)

@@ -2,15 +2,15 @@
 import numpy as np
 import pandas as pd
 import pytest
-from scipy.stats import norm
-
 import synthetic_cases as syn
 from figure_text import pdf_text
+from scipy.stats import norm
+
 from spreadmap import maps
 from spreadmap.design import NAMES, bounds
 from spreadmap.maps import grids
-from spreadmap.surrogate.models import GPModel
 from spreadmap.substrate import floor_label
+from spreadmap.surrogate.models import GPModel
 from spreadmap.surrogate.saved_model import SurrogateModel
 
 LOW, HIGH = bounds()

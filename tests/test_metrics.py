@@ -6,9 +6,21 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from spreadmap.metrics import (NEW_COLUMNS, PHASES, batch_means_sd, case_metrics, classify, counting_constant, flow_trend,
-                               counting_sd, layer_density, mass_flow_ratio, measured_span, passed_volume,
-                               pooled_constant)
+from spreadmap.metrics import (
+    NEW_COLUMNS,
+    PHASES,
+    batch_means_sd,
+    case_metrics,
+    classify,
+    counting_constant,
+    counting_sd,
+    flow_trend,
+    layer_density,
+    mass_flow_ratio,
+    measured_span,
+    passed_volume,
+    pooled_constant,
+)
 
 D = 1.0  # work in units of the diameter
 R = 0.5 * D

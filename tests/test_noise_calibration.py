@@ -5,9 +5,9 @@ chi-square quantiles)."""
 import numpy as np
 import pandas as pd
 import yaml
+from conftest import ROOT
 from scipy import stats
 
-from conftest import ROOT
 from spreadmap.metrics.noise import NOISE_SD_COLUMNS, calibrated_noise, calibration_factors
 
 STUDY = ROOT / "docs" / "study"

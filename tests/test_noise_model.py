@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pandas as pd
 import pytest
-
 from conftest import ROOT
+
 from spreadmap.metrics.noise import calibrated_noise
 from spreadmap.noise_law.apply import case_noise, check_sections
 from spreadmap.noise_law.cells import published_cells, seed_cells

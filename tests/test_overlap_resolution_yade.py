@@ -7,11 +7,10 @@ import math
 import subprocess
 
 import pytest
+from conftest import ROOT
 
 from spreadmap.launcher import clean_environment, yade_executable
 from spreadmap.scene import scene_parameters
-
-from conftest import ROOT
 
 pytestmark = pytest.mark.yade
 E, NU = 2.1e9, 0.3

@@ -6,11 +6,10 @@ import subprocess
 
 import numpy as np
 import pytest
+from conftest import ROOT, case_params, run_scene, with_preset
 
 from spreadmap.geometry import solid_fraction
 from spreadmap.launcher import clean_environment, yade_executable
-
-from conftest import ROOT, case_params, run_scene, with_preset
 
 pytestmark = pytest.mark.yade
 E, NU, RHO = 2.1e9, 0.3, 7980.0

@@ -5,7 +5,6 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import ROOT
 
 spec = importlib.util.spec_from_file_location("precision_benchmark", ROOT / "benchmarks" / "precision.py")

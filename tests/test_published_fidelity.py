@@ -7,8 +7,8 @@ import copy
 import numpy as np
 import pandas as pd
 import pytest
-
 from conftest import ROOT
+
 from spreadmap import config as spreadmap_config
 from spreadmap import fidelity_plan as plan
 from spreadmap import fidelity_study as study

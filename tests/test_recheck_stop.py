@@ -6,7 +6,6 @@ import json
 
 import numpy as np
 import pandas as pd
-
 from conftest import ROOT
 
 STUDY = ROOT / "docs" / "study"

@@ -5,12 +5,11 @@ import json
 import subprocess
 
 import pytest
+from conftest import case_params, run_scene
 
 from spreadmap.launcher import clean_environment, yade_executable
 from spreadmap.metrics import case_metrics
 from spreadmap.render import render, template_sha256
-
-from conftest import case_params, run_scene
 
 
 def test_rendered_script_embeds_the_parameters(config):

@@ -8,8 +8,8 @@ import sys
 
 import pandas as pd
 import yaml
-
 from conftest import ROOT, make_workflow, planned_jobs, snakemake
+
 from spreadmap.checksums import write_manifest
 from spreadmap.restore import restore_cases, restore_steps
 from spreadmap.table import build_table

@@ -1,5 +1,4 @@
 """Tests of spreadmap.convergence.sampling_study (no DEM) and of its figure."""
-import json
 
 import numpy as np
 import pandas as pd

@@ -3,9 +3,9 @@ samples of one), band widths against exact ones, ranks only where the draws sepa
 import numpy as np
 import pandas as pd
 import pytest
-
 import synthetic_cases as syn
 from figure_text import pdf_text
+
 from spreadmap import sensitivity
 from spreadmap.design import NAMES, bounds, to_physical
 from spreadmap.sensitivity import FunctionDraws

@@ -21,7 +21,6 @@ from pathlib import Path
 
 import pytest
 import yaml
-
 from conftest import ROOT
 from slurm_localhost import LocalSlurm, SlurmUnavailable, ensure_packages
 

@@ -1,17 +1,14 @@
 """Stability at the corners of the design space, the in-run watchdog, the outer timeout and the
 refusal of an unsafe step, on the real YADE binary (smoke preset; one study case at the default preset)."""
-import json
 import math
 import time
 
 import pytest
+from conftest import case_params, run_many, run_scene, with_preset
 
-from spreadmap import config as spreadmap_config
 from spreadmap.launcher import retry_wanted
 from spreadmap.metrics import PHASES, case_metrics
 from spreadmap.scene import DENSEST_PACKING, UnsafeTimeStep, rayleigh_time_step, scene_parameters
-
-from conftest import case_params, run_many, run_scene, with_preset
 
 pytestmark = pytest.mark.yade
 

@@ -7,8 +7,8 @@ import re
 import numpy as np
 import pandas as pd
 import pytest
-
 from conftest import ROOT, make_workflow, snakemake
+
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import case_id
 from spreadmap.design import NAMES

@@ -70,8 +70,8 @@ def test_the_studys_rule_so_far_uses_only_complete_partitions(tmp_path):
     """LDS partitions [4, 8, 12] with cases 0-9 finished: only 4 and 8 are complete, and the
     line states the largest change of the five statistics of MFR and PD from 4 to 8, computed here
     with numpy and scipy (std ddof 1, biased skewness and excess kurtosis, floors 1 for those)."""
-    from scipy import stats
     import yaml
+    from scipy import stats
 
     rng = np.random.default_rng(1)
     cases = pd.DataFrame({"case_id": [f"c{i}" for i in range(10)], "index": range(10), "mfr": rng.normal(0.4, 0.05, 10), "pd": rng.normal(0.3, 0.04, 10),

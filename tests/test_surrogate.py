@@ -15,9 +15,9 @@ import joblib
 import numpy as np
 import pandas as pd
 import pytest
+import synthetic_cases as syn
 from sklearn.model_selection import train_test_split
 
-import synthetic_cases as syn
 from spreadmap.design import NAMES
 from spreadmap.surrogate import fitting, models, prediction, saved_model, settings, study, validation
 from spreadmap.surrogate.cli import cli_main
@@ -230,6 +230,7 @@ def test_mlp_draws_the_maps_when_configured():
 
 def test_plots_written(result, tmp_path):
     from figure_text import pdf_text
+
     from spreadmap.substrate import floor_label
     from spreadmap.surrogate.plots import plot_all
 

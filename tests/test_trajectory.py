@@ -10,11 +10,10 @@ import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.collections import PatchCollection
-
-from spreadmap.trajectory import (TABLE_COLUMNS, build_case_figure, choose_moments, plot_case_views,
-                                  sphere_table, view_window)
-from spreadmap.vtk_export import export_case, write_vtk
 from vtk_reader import read_vtk, read_vtk_points
+
+from spreadmap.trajectory import TABLE_COLUMNS, build_case_figure, choose_moments, plot_case_views, sphere_table, view_window
+from spreadmap.vtk_export import export_case, write_vtk
 
 D = 20e-6  # sphere diameter, m
 GAP = 50e-6

@@ -9,7 +9,6 @@ import time
 
 import pandas as pd
 import pytest
-
 from conftest import FAST_SWEEP, SNAKEMAKE, deep_update, make_workflow, planned_jobs, snakemake, write_config
 
 pytestmark = pytest.mark.yade

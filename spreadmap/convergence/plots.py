@@ -15,9 +15,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import NullFormatter
 
-from . import study_rule as cv
 from ..figures import new_figure, save_figure
 from ..table import usable
+from . import study_rule as cv
 
 TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
 STAT_LABELS = {
@@ -296,7 +296,7 @@ def plot_noisy_study(table: pd.DataFrame, summary: pd.DataFrame, path_stem) -> d
         ax.set_xlabel(N_LABEL)
         ax.xaxis.set_minor_formatter(NullFormatter())
         ticks = [16, 32, 64, 128, 256, 512]
-        ax.set_xticks([t for t in ticks if t <= table["n"].max() * 1.05], 
+        ax.set_xticks([t for t in ticks if t <= table["n"].max() * 1.05],
                       [str(t) for t in ticks if t <= table["n"].max() * 1.05])
         ax.grid(True, which="major", alpha=0.3)
     axes[0].set_ylabel("map RMSE against the truth (MFR units) [-]")

@@ -68,9 +68,9 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
+from scipy import stats as _st
 
 from ..table import usable as usable_rows
-from scipy import stats as _st
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")
 TINY = 1e-12

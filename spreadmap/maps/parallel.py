@@ -16,7 +16,8 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from ..design import BY_NAME, NAMES, bounds  # noqa: E402
 from ..figures import save_figure  # noqa: E402
 from ..table import usable  # noqa: E402
-from .style import MapResult, fmt as _fmt  # noqa: E402
+from .style import MapResult  # noqa: E402
+from .style import fmt as _fmt
 
 
 def usable_cases(cases: pd.DataFrame) -> pd.DataFrame:

@@ -8,8 +8,17 @@ regime  the regime rule (scalars or arrays: DEM cases and surrogate predictions 
 case    case_metrics: all of it plus the diagnostics and the stability flags
 """
 from .case import MIN_HEAP_H2, NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure
-from .flow import (heap_h2, heap_volume, layer_density, mass_flow_ratio, measured_span, passed_volume, powder,
-                   sphere_volume, window_passed_volume)
+from .flow import (
+    heap_h2,
+    heap_volume,
+    layer_density,
+    mass_flow_ratio,
+    measured_span,
+    passed_volume,
+    powder,
+    sphere_volume,
+    window_passed_volume,
+)
 from .layer import layer_quality, upper_envelope
 from .noise import batch_means_sd, counting_constant, counting_sd, flow_trend, pooled_constant
 from .regime import REGIMES, RULE_KEYS, classify, regime_probabilities

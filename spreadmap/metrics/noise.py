@@ -16,7 +16,6 @@ flow's own fluctuation); the SD of the window's MFR is SD(batch MFRs) / sqrt(bat
 from __future__ import annotations
 
 import math
-
 from typing import TYPE_CHECKING
 
 import numpy as np

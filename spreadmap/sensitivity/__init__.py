@@ -10,8 +10,8 @@ through ``predict_stats``; ``FunctionDraws`` wraps a known function for tests an
 """
 from .bands import band_widths
 from .draws import FunctionDraws
-from .ranking import rank_by_draws, ranking_table, sensitivity
 from .plot import plot_ranking
+from .ranking import rank_by_draws, ranking_table, sensitivity
 from .sobol import sobol_draws
 
 __all__ = ["band_widths", "plot_ranking", "sobol_draws", "rank_by_draws", "ranking_table", "sensitivity", "FunctionDraws"]
