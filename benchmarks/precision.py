@@ -102,6 +102,10 @@ ARMS = {
     # the fed heap with twice the standing reserve, at the corner: is 4.7 h^2 enough there?
     "fed_2x": {"rev": None, "overrides": {"scene": {"fed_heap": True, "pile_reserve": 9.4}},
                "points": ["fine_thick_corner"]},
+    # the fed heap with half the standing reserve, at the corner: does MFR hold with a heap half
+    # the size (and half the corner's spheres)?
+    "fed_half": {"rev": None, "overrides": {"scene": {"fed_heap": True, "pile_reserve": 2.35}},
+                 "points": ["fine_thick_corner"]},
     "reserve_1h": {"rev": None, "overrides": {"scene": {"pile_reserve": 2.33}}, "points": ["fine_thick_corner"]},
     "reserve_2h": {"rev": None, "overrides": {"scene": {"pile_reserve": 4.67}}, "points": ["fine_thick_corner"]},
 }
