@@ -101,12 +101,14 @@ def main(argv=None) -> int:
     report = []
     for res in results:
         rows = phase_rows(res["phase_cost"])
-        report.append({"point": res["point"], "arm": res["arm"], "n_particles": res["n_particles"], "cpu_time": res["result"]["cpu_time"],
-                       "outcome": res["result"]["outcome"], "status": res["status"], "phases": rows})
+        report.append({"point": res["point"], "arm": res["arm"], "n_particles": res["n_particles"],
+                       "cpu_time": res["result"]["cpu_time"], "outcome": res["result"]["outcome"],
+                       "status": res["status"], "phases": rows})
         print(f"\n{res['point']} {POINTS[res['point']]} [{res['arm']}] at {args.preset}: {res['n_particles']} spheres, "
               f"CPU {res['result']['cpu_time']:.1f} s, {res['result']['outcome']} / {res['status']}")
         engines = sorted({k for r in rows for k in r["shares"]})
-        print(f"  {'phase':8} {'steps':>8} {'spheres':>8} {'bodies':>7} {'intrs':>7} {'contacts':>8} {'timed_s':>8} {'us/sph-step':>11}  "
+        print(f"  {'phase':8} {'steps':>8} {'spheres':>8} {'bodies':>7} {'intrs':>7} {'contacts':>8} "
+              f"{'timed_s':>8} {'us/sph-step':>11}  "
               + " ".join(f"{e[:12]:>12}" for e in engines))
         for r in rows:
             print(f"  {r['phase']:8} {r['steps']:8d} {r['spheres']:8.0f} {r['bodies'] or 0:7d} {r['interactions'] or 0:7d} "

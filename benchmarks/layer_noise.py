@@ -69,7 +69,7 @@ def main(argv=None) -> int:
     for m in MEASURES:
         sd, low, high, dof = pooled(table, m)
         stated = float(np.sqrt(np.mean(table[f"{m}_sd"] ** 2)))
-        ratio = lambda sd: stated / sd if sd > 0 else math.nan  # noqa: E731 (no spread over seeds: no ratio)
+        ratio = lambda sd, stated=stated: stated / sd if sd > 0 else math.nan  # noqa: E731 (no spread over seeds: no ratio)
         out.append({"measure": m, "seed_sd": sd, "seed_sd_low": low, "seed_sd_high": high, "dof": dof,
                     "stated_sd": stated, "ratio": ratio(sd), "ratio_low": ratio(high), "ratio_high": ratio(low)})
     summary = pd.DataFrame(out)

@@ -75,10 +75,12 @@ def summary_markdown(paths: pd.DataFrame, hon: pd.DataFrame, margin: float, law:
                                         mfr=("mfr_true", "median"), pd_=("pd_true", "median"),
                                         est=("mfr_estimate", "median")).reset_index()
     lines += ["", "## The true map error per design and size (worst of MFR and PD, worst grid; over the seeds)", "",
-              "| design | cases | modelled CPU h (median) | true error median | true error p90 | MFR median | PD median | MFR estimate median |",
+              "| design | cases | modelled CPU h (median) | true error median | true error p90 | MFR median | PD median "
+              "| MFR estimate median |",
               "|---|---|---|---|---|---|---|---|"]
     for r in g.itertuples():
-        lines.append(f"| {r.design} | {r.n} | {r.cpu:.2f} | {r.med:.4f} | {r.q90:.4f} | {r.mfr:.4f} | {r.pd_:.4f} | {r.est:.4f} |")
+        lines.append(f"| {r.design} | {r.n} | {r.cpu:.2f} | {r.med:.4f} | {r.q90:.4f} | {r.mfr:.4f} | {r.pd_:.4f} "
+                     f"| {r.est:.4f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -167,7 +169,8 @@ def main(argv=None) -> int:
     write_text_atomically(a.out / "summary.md", summary_markdown(paths, hon, margin, law))
     meta = {"command": "benchmarks/replay.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "margin": margin, "margin_calibrated_on_seeds": f"0-{half - 1}",
-            "margin_calibrated_at_tolerances": a.calibrate_on, "seeds": a.seeds, "max_cases": a.max_cases, "designs": a.designs, "tolerances": a.tolerances,
+            "margin_calibrated_at_tolerances": a.calibrate_on, "seeds": a.seeds, "max_cases": a.max_cases,
+            "designs": a.designs, "tolerances": a.tolerances,
             "replays": int(paths.groupby(["design", "seed"]).ngroups),
             "replay_cpu_s_total": float(paths.groupby(["design", "seed"])["replay_cpu_s"].first().sum())
             if "replay_cpu_s" in paths else None}

@@ -122,7 +122,8 @@ def progress(planned: dict[str, list[tuple[str, dict]]], tables: dict[str, pd.Da
         unique = table.drop_duplicates("case_id") if "case_id" in table else table  # a case shared by two lattices ran once
         status = unique["status"] if "status" in unique else pd.Series(dtype=str)
         cpu = unique["cpu_time"].sum() / 3600.0 if "cpu_time" in unique else 0.0
-        rows.append({"sweep": name, "planned": len({cid for cid, _ in plan}), "finished": len(unique) if "case_id" in table else 0,
+        rows.append({"sweep": name, "planned": len({cid for cid, _ in plan}),
+                     "finished": len(unique) if "case_id" in table else 0,
                      "ok": int((status == "ok").sum()), "failed": int((status != "ok").sum()),
                      "cpu_hours": round(float(cpu), 3)})
         if to_go is not None:

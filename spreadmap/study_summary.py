@@ -161,7 +161,8 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
             continue
         ref = lds[lds["index"] < max(complete)]
         of_lds = difference_from(ref, lds[lds["index"] < n], floors=floors).set_index(["target", "statistic"], drop=False)
-        of_lattice = difference_from(ref, lattice[lattice["k"] == k], floors=floors).set_index(["target", "statistic"], drop=False)
+        of_lattice = (difference_from(ref, lattice[lattice["k"] == k], floors=floors)
+                      .set_index(["target", "statistic"], drop=False))
         parts = []
         # at the largest LDS partition's own size the LDS prefix is the reference itself: the lattice alone
         prefix = n < max(complete)

@@ -107,7 +107,7 @@ def free_port() -> int:
 def detected_node() -> dict[str, str]:
     """This host as slurmd sees it (`slurmd -C`): CPUs, Boards, SocketsPerBoard, ..., RealMemory."""
     out = subprocess.run([_sbin("slurmd"), "-C"], capture_output=True, text=True, check=True, timeout=30).stdout
-    line = next(l for l in out.splitlines() if l.startswith("NodeName="))
+    line = next(ln for ln in out.splitlines() if ln.startswith("NodeName="))
     fields = dict(item.split("=", 1) for item in line.split())
     fields.pop("NodeName", None)
     fields.pop("UpTime", None)

@@ -108,7 +108,8 @@ def test_converge_stops_early_when_the_criterion_holds_at_once(finished_run):
         "ci": {"halfwidth": {"mean": 1000.0, "std": None, "median": None, "skewness": None, "kurtosis": None}}},
         "sweeps": {"lds": {"partitions": [6, 12]}}})
     write_config(finished_run, cfg, drop=("sweeps", "points"))
-    (finished_run / "results" / "converge").exists() and [p.unlink() for p in (finished_run / "results" / "converge").glob("*.json")]
+    (finished_run / "results" / "converge").exists() and [
+        p.unlink() for p in (finished_run / "results" / "converge").glob("*.json")]
     dry = snakemake(finished_run, "converge", "-n")
     assert "converge_step" in planned_jobs(dry.stdout)  # the dry run shows the first step
     run = snakemake(finished_run, "converge", timeout=600)

@@ -16,7 +16,8 @@ def raw_config():
 @pytest.mark.parametrize("change,message", [
     (lambda c: c["material"].update(poisson=0.6), r"'material\.poisson': value 0\.6 .* must be < 0\.5"),
     (lambda c: c["presets"]["default"].update(width_d="five"), r"'presets\.default\.width_d': value 'five' .* of type number"),
-    (lambda c: c.update(preset="fastest"), r"'preset': value 'fastest' .* one of the presets defined: \['default', 'fast', 'reference', 'smoke'\]"),
+    (lambda c: c.update(preset="fastest"),
+     r"'preset': value 'fastest' .* one of the presets defined: \['default', 'fast', 'reference', 'smoke'\]"),
     (lambda c: c.update(bogus=1), r"unknown config key\(s\) \['bogus'\] at the top level"),
     (lambda c: c["sweeps"]["lds"].update(partitions=[8, 1]), r"'sweeps\.lds\.partitions\[1\]': value 1 .* must be >= 2"),
     (lambda c: c["ranges"].update(d_um={"min": 50, "max": 10}), r"'ranges\.d_um': min 50 must be below max 10"),

@@ -9,6 +9,11 @@ from figure_text import pdf_text
 from scipy import stats
 
 from spreadmap import convergence as cv
+from spreadmap.convergence import active, stepper
+from spreadmap.convergence import map_criteria as mc
+from spreadmap.convergence import model as mm
+from spreadmap.design import NAMES, to_physical, to_unit
+from spreadmap.sampling import halton, halton_unit
 from spreadmap.substrate import floor_label
 
 TOL = cv.DEFAULT_TOLERANCE
@@ -358,13 +363,6 @@ def test_statistic_panels_are_scaled_to_the_partitions_not_the_first_few_cases()
 # ---------------------------------------------------------------------------------------------
 # the map model interface (a GP) and the map-level criteria, on functions with known truth
 # ---------------------------------------------------------------------------------------------
-from spreadmap.convergence import active, stepper  # noqa: E402
-from spreadmap.convergence import map_criteria as mc
-from spreadmap.convergence import model as mm
-from spreadmap.design import NAMES, to_physical, to_unit  # noqa: E402
-from spreadmap.sampling import halton, halton_unit  # noqa: E402
-
-
 def _smooth(u):
     """A smooth MFR-like truth: 0.3 + 0.06 u_f - 0.04 u_d + 0.02 u_h u_v (range ~0.24-0.38)."""
     u = np.asarray(u, float)
@@ -468,7 +466,7 @@ def test_cv_rmse_scored_on_the_lds_share_estimates_the_map_error_where_all_cases
     # the map's error over the box: models trained as inside the folds (4/5 of the cases)
     grid = rng.random((4096, 4))
     errs = []
-    for k in range(5):
+    for _ in range(5):
         keep = rng.random(len(U)) < 0.8
         errs.append(np.mean((Knn(U[keep], y[keep], None).predict(grid) - truth(grid)) ** 2))
     true_error = np.sqrt(np.mean(errs))
@@ -569,7 +567,10 @@ def test_criteria_hold_with_many_cases_and_not_with_few():
 
 def test_tracker_first_held_and_stop():
     tr = mc.Tracker(["cv_rmse", "ci"], hold_for=2)
-    r = lambda a, b: {"cv_rmse": {"value": a, "holds": a <= 1}, "map_change": None, "ci": {"value": b, "holds": b <= 1}}
+
+    def r(a, b):
+        return {"cv_rmse": {"value": a, "holds": a <= 1}, "map_change": None, "ci": {"value": b, "holds": b <= 1}}
+
     tr.add(32, r(1.5, 2.0))
     tr.add(48, r(0.9, 1.2))
     assert not tr.stop()
@@ -755,7 +756,7 @@ def test_active_batches_keep_an_lds_share_and_statistics_use_it():
     for k, step in enumerate(path[:-1]):
         got = pd.DataFrame(step["next_batch"])[list(NAMES)].to_numpy()
         assert np.allclose(got[:4], lds[16 + 4 * k: 20 + 4 * k], atol=1e-3)
-        assert not any(np.allclose(g, l, atol=1e-3) for g in got[4:] for l in lds)
+        assert not any(np.allclose(g, p, atol=1e-3) for g in got[4:] for p in lds)
     assert rec["is_lds"] == [True] * 16 + ([True] * 4 + [False] * 4) * 2
     assert rec["n_lds"] == 24 and rec["study_rule_path"][-1]["n_lds"] == 24
     # the CV criterion scored the LDS share's predictions only, and the summary says so

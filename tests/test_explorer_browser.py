@@ -91,7 +91,8 @@ def test_moving_a_slider_shows_the_python_models_prediction(page):
         assert after["values"]["mfr"] != before["values"]["mfr"]  # the slider changed what is shown
         # a click on the MFR map's cell (h[1], v[4]) moves the probe there
         where = json.loads(browser.evaluate(
-            "(function () { var gd = explorer.plot, L = gd._fullLayout, xa = L.xaxis, ya = L.yaxis, b = gd.getBoundingClientRect();"
+            "(function () { var gd = explorer.plot, L = gd._fullLayout, xa = L.xaxis, ya = L.yaxis, "
+            "b = gd.getBoundingClientRect();"
             f" return JSON.stringify([b.left + xa._offset + xa.d2p({v[4]}), b.top + ya._offset + ya.d2p({h[1]})]); }})()"))
         browser.click(*where)
         browser.wait_for("explorer.state.hi === 1 && explorer.state.vi === 4", 20)

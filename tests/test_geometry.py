@@ -314,7 +314,7 @@ def test_random_multi_face_cases_against_quadrature():
 def _cubic_lattice(r, lo, hi):
     """Simple cubic lattice of touching spheres (spacing 2r, a site at the origin) covering the box."""
     a = 2.0 * r
-    axes = [np.arange(np.floor(l / a) - 1, np.ceil(h / a) + 2) * a for l, h in zip(lo, hi)]
+    axes = [np.arange(np.floor(low / a) - 1, np.ceil(high / a) + 2) * a for low, high in zip(lo, hi)]
     grid = np.meshgrid(*axes, indexing="ij")
     return np.column_stack([g.ravel() for g in grid])
 

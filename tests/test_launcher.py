@@ -14,8 +14,9 @@ from spreadmap.table import build_table
 POINT = {"f": 0.3, "d_um": 10.0, "h_um": 60.0, "v_mm_s": 10.0}
 REFUSAL = ("REFUSED: time_step 3.374e-06 s is above the Rayleigh critical step 1.687e-06 s of this case "
            "(d = 10.0 um, density 7980000 kg/m3); lower it below the critical step.")
+# YADE's banner line ends in a space: written \x20 below, so the logs stay verbatim without trailing whitespace
 REFUSED_LOG = f"""$ /usr/bin/yade -n -j1 -x /tmp/case.py /tmp/raw.json
-Welcome to Yade 2023.02a 
+Welcome to Yade 2023.02a\x20
 Using python version: 3.11.2 (main, Apr 28 2025, 14:11:48) [GCC 12.2.0]
 TCP python prompt on localhost:9001, auth cookie `akueys'
 XMLRPC info provider on http://localhost:21001
@@ -23,7 +24,7 @@ Running script /tmp/case.py
 [smoke-f0.3000-d10.000-h60.000-v10.0000-s1] {REFUSAL}
 """
 CRASHED_LOG = """$ /usr/bin/yade -n -j1 -x /tmp/case.py /tmp/raw.json
-Welcome to Yade 2023.02a 
+Welcome to Yade 2023.02a\x20
 Running script /tmp/case.py
 [smoke-f0.3000-d10.000-h60.000-v10.0000-s1] start: 404 spheres
 Traceback (most recent call last):

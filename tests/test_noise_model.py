@@ -137,7 +137,8 @@ def test_the_law_sets_each_case_noise_sd_of_mfr_and_pd_and_the_bands_the_layer_m
     out = case_noise(table, NOISE_MODEL, bands)
     m, p = NOISE_MODEL["mfr"], NOISE_MODEL["pd"]
     np.testing.assert_allclose(out["mfr_sd"][:2], [0.3 * 0.03 * (1.2 / 2) ** -0.8, 0.5 * 0.03 * 2 ** -0.4 * 1.5 ** -0.8])
-    np.testing.assert_allclose(out["pd_sd"][:2], [0.28 * 0.031 * 0.8 ** -0.5 * 0.6 ** -0.9, 0.45 * 0.031 * (250 / 150) ** -0.5 * 1.5 ** -0.9])
+    np.testing.assert_allclose(out["pd_sd"][:2], [0.28 * 0.031 * 0.8 ** -0.5 * 0.6 ** -0.9,
+                                                  0.45 * 0.031 * (250 / 150) ** -0.5 * 1.5 ** -0.9])
     # nothing passed: one sphere's worth (read off the stated SD) times the law at N = 1
     np.testing.assert_allclose(out["mfr_sd"][2], 0.002 * m["rel_sd"] * (1 / 150) ** m["n_exponent"])
     # half a sphere in the box: per sphere = PD / n, at N = 1

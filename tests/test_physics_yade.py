@@ -60,7 +60,8 @@ def test_sphere_box_contact_is_hertz_with_half_radius(tmp_path):
     radius, speed = 25e-6, 0.1
     mass = RHO * 4.0 / 3.0 * math.pi * radius ** 3
     result = collide(tmp_path, "wall", 1.0, speed, radius)
-    print(f"elastic wall: contact time / Hertz(R/2) = {result['contact_time'] / hertz_contact_time(mass, radius / 2, speed):.6f}, "
+    print(f"elastic wall: contact time / Hertz(R/2) = "
+          f"{result['contact_time'] / hertz_contact_time(mass, radius / 2, speed):.6f}, "
           f"/ Hertz(R) = {result['contact_time'] / hertz_contact_time(mass, radius, speed):.6f}")
     assert result["contact_time"] == pytest.approx(hertz_contact_time(mass, radius / 2, speed), rel=0.002)
     # measured 1.1488 against 2^(1/5) = 1.1487

@@ -15,7 +15,8 @@ spec.loader.exec_module(tool)
 def test_only_cases_flagged_for_their_overlap_alone_are_chosen():
     assert tool.overlap_flagged_only({"flagged": True, "flag_reason": "peak overlap 0.0948 R > 0.05 R"})
     assert not tool.overlap_flagged_only({"flagged": False, "flag_reason": ""})
-    assert not tool.overlap_flagged_only({"flagged": True, "flag_reason": "peak overlap 0.09 R > 0.05 R; 3 spheres escaped the box"})
+    assert not tool.overlap_flagged_only({"flagged": True,
+                                          "flag_reason": "peak overlap 0.09 R > 0.05 R; 3 spheres escaped the box"})
     assert not tool.overlap_flagged_only({"flagged": True, "flag_reason": "time step 1.20 x critical"})
 
 

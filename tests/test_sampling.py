@@ -68,5 +68,6 @@ def test_points_csv_seed_column_takes_reproducible_seeds_only(tmp_path):
     assert [p["seed"] for p in chosen_points({"csv": "good.csv"}, tmp_path)] == [0, None, 7]
     for bad in ("-1", "1.5", "x"):
         (tmp_path / "bad.csv").write_text(f"f,d_um,h_um,v_mm_s,seed\n0.3,30,65,10,1\n0.3,30,65,10,{bad}\n")
-        with pytest.raises(ValueError, match=rf"row 3, column 'seed': seed = .*{bad}.* is not allowed; a packing seed is an integer >= 0"):
+        with pytest.raises(ValueError,
+                           match=rf"row 3, column 'seed': seed = .*{bad}.* is not allowed; a packing seed is an integer >= 0"):
             chosen_points({"csv": "bad.csv"}, tmp_path)

@@ -235,7 +235,8 @@ def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(publ
         changes = parts.loc[parts["sweep"] == sweep, "max_change"].dropna()
         assert (changes > tol).all() and summary["sweeps"][sweep]["converged_n"] is None, sweep
     assert list(parts.loc[parts["sweep"] == "lds", "partition"]) == sorted(cfg["sweeps"]["lds"]["partitions"])
-    assert list(parts.loc[parts["sweep"] == "lattice", "partition"]) == sorted(k ** len(NAMES) for k in cfg["sweeps"]["lattice"]["k"])
+    assert list(parts.loc[parts["sweep"] == "lattice", "partition"]) == sorted(k ** len(NAMES)
+                                                                               for k in cfg["sweeps"]["lattice"]["k"])
 
 
 def test_published_summary_recomputes_from_the_published_files(published, tmp_path):

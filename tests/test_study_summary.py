@@ -74,7 +74,8 @@ def test_the_studys_rule_so_far_uses_only_complete_partitions(tmp_path):
     from scipy import stats
 
     rng = np.random.default_rng(1)
-    cases = pd.DataFrame({"case_id": [f"c{i}" for i in range(10)], "index": range(10), "mfr": rng.normal(0.4, 0.05, 10), "pd": rng.normal(0.3, 0.04, 10),
+    cases = pd.DataFrame({"case_id": [f"c{i}" for i in range(10)], "index": range(10), "mfr": rng.normal(0.4, 0.05, 10),
+                          "pd": rng.normal(0.3, 0.04, 10),
                           "status": "ok", "flagged": False, "regime": "normal", "f": 0.3, "d_um": 30.0,
                           "h_um": 65.0, "v_mm_s": 10.0})
     cases.to_csv(tmp_path / "cases_lds.csv", index=False)

@@ -84,7 +84,8 @@ def fit_target(cells: pd.DataFrame, target: str, bands: list, boots: int) -> dic
     grid = pd.DataFrame({"h_over_d": HD_TABLE, "n": N_REF, "mean": 1.0})
     rel, se = law.sd(grid), law.se_ln_sd(grid)
     by_hd = pd.DataFrame({"target": target, "h_over_d": HD_TABLE, "c_at_n_ref": rel * math.sqrt(N_REF),
-                          "c_lo": rel * np.exp(-1.96 * se) * math.sqrt(N_REF), "c_hi": rel * np.exp(1.96 * se) * math.sqrt(N_REF)})
+                          "c_lo": rel * np.exp(-1.96 * se) * math.sqrt(N_REF),
+                          "c_hi": rel * np.exp(1.96 * se) * math.sqrt(N_REF)})
 
     out = cells.copy()
     out["sd_law"] = law.sd(cells)
@@ -198,7 +199,8 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "",
         "## The fitted law",
         "",
-        "| target | exp(a): relative SD at N = 150, h/d = 2 | c = exp(a) sqrt(150) | b: power of N | g: power of h/d | b = -1/2: LR p |",
+        "| target | exp(a): relative SD at N = 150, h/d = 2 | c = exp(a) sqrt(150) | b: power of N | g: power of h/d "
+        "| b = -1/2: LR p |",
         "|---|---|---|---|---|---|",
     ]
     for target in TARGETS:
@@ -227,13 +229,15 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "**The noise falls with h/d**, about as (h/d)^-0.8 for both targets: c at N = 150 (Wald 95 %; "
         "`by_h_over_d.csv`), against the stated c = " + f"{stated_c:g}:",
         "",
-        "| h/d | " + " | ".join(f"{t.upper()} c at N = 150" for t in TARGETS) + " | " + " | ".join(f"{t.upper()} / stated" for t in TARGETS) + " |",
+        "| h/d | " + " | ".join(f"{t.upper()} c at N = 150" for t in TARGETS) + " | "
+        + " | ".join(f"{t.upper()} / stated" for t in TARGETS) + " |",
         "|---|---|---|---|---|",
     ]
     for hd in HD_TABLE:
         vals = [by_hd[(by_hd["target"] == t) & (by_hd["h_over_d"] == hd)].iloc[0] for t in TARGETS]
         L.append(f"| {hd:g} | " + " | ".join(ci(v['c_at_n_ref'], v['c_lo'], v['c_hi'], '{:.2f}') for v in vals) + " | "
-                 + " | ".join(ci(v['c_at_n_ref'] / stated_c, v['c_lo'] / stated_c, v['c_hi'] / stated_c, '{:.2f}') for v in vals) + " |")
+                 + " | ".join(ci(v['c_at_n_ref'] / stated_c, v['c_lo'] / stated_c, v['c_hi'] / stated_c, '{:.2f}')
+                              for v in vals) + " |")
     L += [
         "",
         "The hand bands said x1.37 below h/d 2 and x0.61 (MFR, PD) from 3 on, 1 between: a step where the data "
@@ -246,7 +250,8 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "|---|---|---|---|---|",
     ]
     for _, row in per_band.iterrows():
-        L.append(f"| {row['target'].upper()} | {row['band']} | {row['cells']} | {row['dof']} | {ci(row['c_pooled'], row['c_lo'], row['c_hi'])} |")
+        L.append(f"| {row['target'].upper()} | {row['band']} | {row['cells']} | {row['dof']} | "
+                 f"{ci(row['c_pooled'], row['c_lo'], row['c_hi'])} |")
     L += [
         "",
         "**What else it might depend on** (`terms.csv`: each term added to the law alone, likelihood-ratio test, "
@@ -267,7 +272,8 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "Terms: `ln_hd_sq` curvature in ln(h/d); `ln_h` ln h beside ln(h/d), i.e. h apart from d (in this box h/d "
         "is mostly d: h spans 1.36x, d 5x); `ln_value` a free power of the value besides the relative SD; `ln_v`, "
         "`f` blade speed and friction; `variant:*` a preset or arm apart from the rest; `source:study` the study's cells "
-        "apart from the benchmarks'; `source:fidelity_knobs` the one-knob variants. None passes the Bonferroni line; the law keeps ln N and ln(h/d).",
+        "apart from the benchmarks'; `source:fidelity_knobs` the one-knob variants. None passes the Bonferroni line; "
+        "the law keeps ln N and ln(h/d).",
         "",
         "## Checked on points it did not see",
         "",
@@ -279,7 +285,8 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "from the union of the two (called only when both exclude 1). Coverage: the 90 % interval the predicted SD "
         "gives a case (+- 1.645 SD) against the seeds (each seed's deviation from its cell's mean, scaled by "
         "sqrt(k / (k - 1)), has one case's SD); the share inside, its interval the union of a bootstrap over design "
-        "points and Clopper-Pearson over seeds, called too wide or too narrow only when it excludes 90 %. Shape: a Kolmogorov-Smirnov test of "
+        "points and Clopper-Pearson over seeds, called too wide or too narrow only when it excludes 90 %. "
+        "Shape: a Kolmogorov-Smirnov test of "
         "the cells' PITs, F_chi2_nu(nu u), against uniform (`spreadmap/noise_law/heldout.py`, `heldout.csv`).",
         "",
     ]
@@ -298,7 +305,8 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
             vals = [cells_in[cells_in["predictor"] == p].iloc[0] for p in
                     ("fitted law, held out", "stated SDs", "stated SDs x hand bands (in sample where fitted)")]
             L.append(f"| {band} | {vals[0]['cells']} | " + " | ".join(
-                f"{v['ratio']:.2f} ({min(v['ratio_chi2_lo'], v['ratio_boot_lo']):.2f}-{max(v['ratio_chi2_hi'], v['ratio_boot_hi']):.2f}) "
+                f"{v['ratio']:.2f} ({min(v['ratio_chi2_lo'], v['ratio_boot_lo']):.2f}-"
+                f"{max(v['ratio_chi2_hi'], v['ratio_boot_hi']):.2f}) "
                 f"{v['verdict']}; {100 * v['coverage90']:.0f} % ({100 * v['coverage90_lo']:.0f}-{100 * v['coverage90_hi']:.0f}) "
                 f"{v['coverage_verdict']}" for v in vals) + " |")
         L.append("")
@@ -316,7 +324,8 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
             if verdicts == {"consistent"} else
             f"**Verdict: the held-out check calls the law {', '.join(sorted(verdicts - {'consistent'}))}** in part (above)."),
         "The stated SDs (c = 0.37, N^-1/2, no h/d) are too wide at h/d >= 3. The hand bands mend that, but at h/d < 2 "
-        f"they read R {thin_text}: their thin-gap factor errs wide (called so above where an interval excludes the nominal); and they are scored in sample, on cells "
+        f"they read R {thin_text}: their thin-gap factor errs wide (called so above where an interval excludes the nominal); "
+        "and they are scored in sample, on cells "
         "they were fitted to, where the law is scored held out. Over all cells the three read alike because the "
         "stated SDs' errors at the two ends cancel; the law is right in each band, by one smooth function with "
         "intervals, where the bands are two hand-set steps.",
@@ -330,8 +339,10 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
     ]
     for _, row in arms.iterrows():
         L.append(f"| {row['target'].upper()} {row['arm']} | {row['scene']} | {row['cells']} | {row['ratio']:.2f} "
-                 f"({row['ratio_chi2_lo']:.2f}-{row['ratio_chi2_hi']:.2f}; {row['ratio_boot_lo']:.2f}-{row['ratio_boot_hi']:.2f}) | "
-                 f"{row['verdict']} | {100 * row['coverage90']:.0f} % ({100 * row['coverage90_lo']:.0f}-{100 * row['coverage90_hi']:.0f}) "
+                 f"({row['ratio_chi2_lo']:.2f}-{row['ratio_chi2_hi']:.2f}; "
+                 f"{row['ratio_boot_lo']:.2f}-{row['ratio_boot_hi']:.2f}) | "
+                 f"{row['verdict']} | {100 * row['coverage90']:.0f} % "
+                 f"({100 * row['coverage90_lo']:.0f}-{100 * row['coverage90_hi']:.0f}) "
                  f"{row['coverage_verdict']} |")
     L += [
         "",
@@ -398,7 +409,8 @@ def arm_sentence(arms: pd.DataFrame) -> str:
                  if whole["verdict"] == "consistent" and whole["ratio_chi2_lo"] > 1 else "")
         parts.append(f"`precision` (MFR) with its corner reads {r_text(whole)}{split}. The corner's three unflagged seeds "
                      "read MFR 0.19 against 0.53 with the shipped standing heap: a pile that ran down (the fourth seed "
-                     f"was flagged for it; the three rows have no flow trend recorded), not counting noise. Without the corner, {r_text(rest)}: "
+                     "was flagged for it; the three rows have no flow trend recorded), not counting noise. "
+                     f"Without the corner, {r_text(rest)}: "
                      "its seeds agree better than the law predicts for the shipped scene, so the law is not carried "
                      "over to that scene (its 226-sphere windows without a standing reserve, the cheaper settle).")
     phys = row("mfr", "physics")

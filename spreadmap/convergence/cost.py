@@ -97,7 +97,10 @@ def fit_law(tables: Iterable[pd.DataFrame], config: Mapping) -> dict:
             if not len(cpu):
                 continue
             w = planned_work(X, config, str(preset))
-            Ns.append(w[:, 0]); Ss.append(w[:, 1]); ys.append(np.log(cpu)); groups.append(np.full(len(cpu), g))
+            Ns.append(w[:, 0])
+            Ss.append(w[:, 1])
+            ys.append(np.log(cpu))
+            groups.append(np.full(len(cpu), g))
     if not ys:
         raise ValueError("no finished case with a CPU time and a known preset to fit the cost law on")
     N, S, y, grp = (np.concatenate(a) for a in (Ns, Ss, ys, groups))

@@ -204,7 +204,8 @@ def describe(record: Mapping[str, Any]) -> str:
         lines.append(f"  {name} ({req}): {state}{note}; {held}")
     sr = record["study_rule"]
     lines.append(f"  study's rule (reported): {'converged at ' + str(sr['converged_at']) if sr['converged'] else 'not converged'}"
-                 + ("" if sr["max_change_now"] is None or (isinstance(sr["max_change_now"], float) and math.isnan(sr["max_change_now"]))
+                 + ("" if sr["max_change_now"] is None
+                    or (isinstance(sr["max_change_now"], float) and math.isnan(sr["max_change_now"]))
                     else f"; largest change now {sr['max_change_now']:.4f}"))
     if record["next_n"]:
         lines.append(f"  next: {len(record['next_batch'])} cases ({record['settings']['sampling']}), up to {record['next_n']}")

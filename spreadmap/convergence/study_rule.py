@@ -41,8 +41,9 @@ with the floors of ``DEFAULT_FLOORS``:
   zero when a whole partition jams (MFR all 0); then 0/TINY = 0 reads as "no change".
 
 The tables of ``convergence_table`` carry, for every statistic, the change *and* the denominator
-used and whether that denominator was ``|prev|`` or the floor, so every decision can be audited.  A statistic that is NaN (fewer than two
-usable values, zero spread) gives a NaN change, and a NaN change never satisfies the criterion.
+used and whether that denominator was ``|prev|`` or the floor, so every decision can be audited.
+A statistic that is NaN (fewer than two usable values, zero spread) gives a NaN change, and a NaN
+change never satisfies the criterion.
 
 Floors are configurable (``floors={"skewness": 0.5, ...}``); passing 0 (or ``TINY``) for
 skewness/kurtosis gives back the naive relative rule (tests show that rule never converging on

@@ -100,7 +100,8 @@ def explorer_figure(data: dict, i: int, j: int):
     region = _slice(data, data["region"], i, j)
     near = data["cases"]["near"][i * len(data["d"]) + j]
     index = {"mean": [], "sd": [], "beyond": [], "cases": [], "region": [], "probe": []}
-    hover = "v %{x:.3g} mm/s, h %{y:.3g} um<br>mean %{z:.4f}<br>model SD %{customdata[0]:.4f}<br>new run SD %{customdata[1]:.4f}<extra>%{meta}</extra>"
+    hover = ("v %{x:.3g} mm/s, h %{y:.3g} um<br>mean %{z:.4f}<br>model SD %{customdata[0]:.4f}"
+             "<br>new run SD %{customdata[1]:.4f}<extra>%{meta}</extra>")
     grey = [[0, "rgba(110,110,110,0.55)"], [1, "rgba(110,110,110,0.55)"]]
     for k, t in enumerate(targets):
         row, col = 2 * (k // COLUMNS) + 1, k % COLUMNS + 1
@@ -135,10 +136,14 @@ def explorer_figure(data: dict, i: int, j: int):
                                          marker=dict(symbol="x-thin", size=12, line=dict(width=2, color="red")),
                                          showlegend=False), row=r, col=col)
                 index["probe"].append(len(fig.data) - 1)
-    for name, style in (("recommended region: P >= confidence, within the data", dict(mode="lines", line=dict(color="#ff2bd6", width=3))),
-                        ("beyond the data", dict(mode="markers", marker=dict(symbol="square", size=12, color="rgba(110,110,110,0.55)"))),
-                        ("DEM cases run at this (f, d) cell", dict(mode="markers", marker=dict(symbol="circle-open", size=9, color="black", line=dict(width=2)))),
-                        ("read-out probe (click a cell to move it)", dict(mode="markers", marker=dict(symbol="x-thin", size=11, line=dict(width=2, color="red"))))):
+    for name, style in (("recommended region: P >= confidence, within the data",
+                         dict(mode="lines", line=dict(color="#ff2bd6", width=3))),
+                        ("beyond the data",
+                         dict(mode="markers", marker=dict(symbol="square", size=12, color="rgba(110,110,110,0.55)"))),
+                        ("DEM cases run at this (f, d) cell",
+                         dict(mode="markers", marker=dict(symbol="circle-open", size=9, color="black", line=dict(width=2)))),
+                        ("read-out probe (click a cell to move it)",
+                         dict(mode="markers", marker=dict(symbol="x-thin", size=11, line=dict(width=2, color="red"))))):
         fig.add_trace(go.Scatter(x=[None], y=[None], name=name, showlegend=True, **style))
     fig.update_xaxes(title_text="v [mm/s]", title_font_size=10, tickfont_size=9)
     fig.update_yaxes(title_text="h [um]", title_font_size=10, tickfont_size=9)
@@ -182,7 +187,8 @@ function show() {
   var near = D.cases.near[S.fi * D.d.length + S.di];
   var cx = near.map(function (n) { return D.cases.v[n]; }), cy = near.map(function (n) { return D.cases.h[n]; });
   Plotly.restyle(gd, {x: IDX.cases.map(function () { return cx; }), y: IDX.cases.map(function () { return cy; })}, IDX.cases);
-  Plotly.restyle(gd, {x: IDX.probe.map(function () { return [D.v[S.vi]]; }), y: IDX.probe.map(function () { return [D.h[S.hi]]; })}, IDX.probe);
+  Plotly.restyle(gd, {x: IDX.probe.map(function () { return [D.v[S.vi]]; }), \
+y: IDX.probe.map(function () { return [D.h[S.hi]]; })}, IDX.probe);
   readout(near.length);
 }
 function readout(ncases) {
@@ -217,7 +223,8 @@ window.explorerReady = true;
 PAGE = """<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>spreadmap explorer</title>
 <style>body{{font-family:sans-serif;margin:16px;color:#222}} table{{border-collapse:collapse;font-size:14px}}
-td,th{{padding:2px 10px;text-align:right}} th{{border-bottom:1px solid #999}} .note{{color:#555;font-size:13px;max-width:1350px}}</style>
+td,th{{padding:2px 10px;text-align:right}} th{{border-bottom:1px solid #999}} \
+.note{{color:#555;font-size:13px;max-width:1350px}}</style>
 </head><body>
 <h2>spreadmap explorer: the surrogate's map over (v, h), friction and diameter on the sliders</h2>
 <p id="floor"><b>{floor}</b></p>

@@ -63,7 +63,8 @@ def decision_figure(grids: dict, table: pd.DataFrame, powders, dec: dict, suppor
             ax.plot(row["v_mm_s"], row["h_um"], ls="none", marker=style["marker"], ms=13 if style["marker"] == "*" else 10,
                     mfc=style["color"] if filled else "none", mec="white" if filled else style["color"], mew=1.5,
                     zorder=5)
-            ax.annotate(f"{row['probability']:.2f}", (row["v_mm_s"], row["h_um"]), xytext=(6, -12 if row["kind"] == "fastest" else 6),
+            ax.annotate(f"{row['probability']:.2f}", (row["v_mm_s"], row["h_um"]),
+                        xytext=(6, -12 if row["kind"] == "fastest" else 6),
                         textcoords="offset points", fontsize=8, color="white", zorder=6,
                         bbox=dict(boxstyle="round,pad=0.15", fc=style["color"], ec="none", alpha=0.85))
         status = set(mine["status"])

@@ -96,7 +96,7 @@ def parallel_coordinates(
         ax.plot(xpos, xb, color="white", lw=5.5, zorder=5)
         ax.plot(xpos, xb, color="tab:red", lw=3.0, marker="o", ms=7, zorder=6,
                 label="best case")
-        for k, n in enumerate(NAMES):
+        for k, _n in enumerate(NAMES):
             ax.axvline(xpos[k], color="0.2", lw=1.0, zorder=3)
             for tv in np.linspace(0, 1, n_ticks):
                 phys = low[k] + tv * (high[k] - low[k])

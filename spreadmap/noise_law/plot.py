@@ -50,7 +50,8 @@ def law_figure(cells: dict[str, pd.DataFrame], laws: dict[str, NoiseLaw], stated
             for name, (_, marker, colour) in GROUPS.items():
                 sel = c["source"].map(_group) == name
                 if sel.any():
-                    ax.errorbar(c.loc[sel, x_col], y[sel], yerr=[y[sel] * (1 - band[sel.to_numpy(), 0]), y[sel] * (band[sel.to_numpy(), 1] - 1)],
+                    ax.errorbar(c.loc[sel, x_col], y[sel],
+                                yerr=[y[sel] * (1 - band[sel.to_numpy(), 0]), y[sel] * (band[sel.to_numpy(), 1] - 1)],
                                 fmt=marker, color=colour, ms=4, lw=0.6, alpha=0.75, label=f"{name} ({int(sel.sum())} cells)")
             grid = _grid(c, x_col, N_REF, HD_REF)
             fit = law.sd(grid)
