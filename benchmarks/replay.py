@@ -13,6 +13,7 @@ arguments reuses paths.csv rows already computed (by design and seed).
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import sys
 import time
@@ -105,7 +106,12 @@ def main(argv=None) -> int:
     config = load(a.config)
     tables = published_tables(a.study)
     law_tables = tables + ([pd.read_csv(a.fidelity)] if a.fidelity.exists() else [])
-    law = fit_law(law_tables, config)
+    # the law relates the work a case planned to its CPU: the published cases ran the full pile
+    # (before scene.fed_heap shipped), so their planned work is that scene's; the fitted law then
+    # prices the shipped scene's planned work (docs/case_cost: it predicts the fed cost)
+    published_scene = copy.deepcopy(config)
+    published_scene["scene"]["fed_heap"] = False
+    law = fit_law(law_tables, published_scene)
     write_text_atomically(a.out / "cost_law.json", json.dumps(law, indent=1) + "\n")
     print(f"cost law on {law['cases']} published cases: CPU s = exp({law['ln_a']:.3f}) N^{law['b_particles']:.3f} "
           f"S^{law['b_steps']:.3f}, residual SD {law['residual_sd']:.3f} (ln, within sessions)")
