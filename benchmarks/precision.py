@@ -61,6 +61,14 @@ POINTS = {  # f, d_um, h_um, v_mm_s: the four fidelity points, the two corners, 
     "middle": (0.22, 35, 70, 7),
     "fine_thick_corner": (0.30, 10, 75, 10),  # last: the costliest case of today's scene
 }
+DEFAULT_POINTS = list(POINTS)
+# the floor issue's points (issue 36: its table of the rough against the flat floor, 3 seeds each)
+FLOOR_POINTS = {
+    "floor_fine": (0.30, 29, 57, 10),
+    "floor_coarse": (0.45, 45, 61, 6),
+    "floor_thin_slippery": (0.15, 50, 55, 15),  # h/d 1.1: the full pile drained on the flat floor
+}
+POINTS.update(FLOOR_POINTS)
 OLD_DEFAULT = {"width_d": 5, "heap_height_d": 10, "pile_length_min_d": 6, "heap_reserve": 1.5, "transient_d": 3,
                "window_d": 8, "dt_factor": 0.3, "density_scale": 1000, "target_cv": None, "steady_min_d": None}
 OLD_SETTLE = {"cloud_fraction": 0.25, "relax_time_factor": 1.5}
@@ -106,6 +114,12 @@ ARMS = {
     # the size (and half the corner's spheres)?
     "fed_half": {"rev": None, "overrides": {"scene": {"fed_heap": True, "pile_reserve": 2.35}},
                  "points": ["fine_thick_corner"]},
+    # the study's flat floor with the fed heap (shipped) and with the full pile (before it): does a
+    # fed heap keep the flat floor's pile from draining at thin gaps? (issue 36)
+    "flat_fed": {"rev": None, "overrides": {"scene": {"substrate": {"kind": "flat"}}},
+                 "points": [*FLOOR_POINTS, "narrow_gap_large"]},
+    "flat_full": {"rev": None, "overrides": {"scene": {"substrate": {"kind": "flat"}, "fed_heap": False}},
+                  "points": [*FLOOR_POINTS, "narrow_gap_large"]},
     "reserve_1h": {"rev": None, "overrides": {"scene": {"pile_reserve": 2.33}}, "points": ["fine_thick_corner"]},
     "reserve_2h": {"rev": None, "overrides": {"scene": {"pile_reserve": 4.67}}, "points": ["fine_thick_corner"]},
 }
@@ -498,7 +512,7 @@ def report(rows: list[dict], arms: list[str]) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--arms", nargs="+", default=list(ARMS), choices=list(ARMS))
-    ap.add_argument("--points", nargs="+", default=list(POINTS), choices=list(POINTS))
+    ap.add_argument("--points", nargs="+", default=DEFAULT_POINTS, choices=list(POINTS))
     ap.add_argument("--seeds", nargs="+", type=int, default=[1, 2, 3, 4])
     ap.add_argument("--today-rev", default=ARMS["today"]["rev"], help="revision of the `today` arm")
     ap.add_argument("--workers", type=int, default=2)
