@@ -118,6 +118,12 @@ FAST_SWEEP = {"preset": "smoke", "scene": {"substrate": {"kind": "flat"}},
               "ranges": {"d_um": {"min": 35, "max": 50}, "h_um": {"min": 55, "max": 75}},
               "points": {"named": {}}, "pictures": {"cases": [], "vtk": []},
               # the shipped powders lie below d = 35 um: outside these ranges, which the config refuses
-              "decisions": {"powders": {"demo": {"f": 0.3, "d_um": 45.0}}}}
+              "decisions": {"powders": {"demo": {"f": 0.3, "d_um": 45.0}},
+                            # the decisions' and the explorer's grids at their smallest that still show
+                            # a region (with the shipped 21 x 21 and 7 x 9 x 17 x 21, the analysis-DAG
+                            # fixture's decide and explorer jobs took 49 s and 65 s on a busy machine;
+                            # it tests the workflow, not the resolution)
+                            "machine": {"n_h": 5, "n_v": 5},
+                            "explorer": {"n_f": 3, "n_d": 3, "n_h": 5, "n_v": 5}}}
 # (section, key) pairs an override replaces instead of merging into (a mapping of names)
 REPLACED = (("decisions", "powders"),)
