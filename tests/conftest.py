@@ -12,11 +12,10 @@ import pytest
 from dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import case_id, rounded
+from spreadmap.cases import case_scene
 from spreadmap.files import write_text_atomically
 from spreadmap.launcher import run_case
 from spreadmap.render import render
-from spreadmap.scene import scene_parameters
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -36,8 +35,7 @@ def run_scene(params: dict, workdir: Path) -> tuple[dict, dict]:
 
 
 def case_params(config: dict, point: dict, preset: str = "smoke", **overrides) -> dict:
-    cid = case_id(point, preset, config["scene"]["seed"])
-    params = scene_parameters(rounded(point), preset, config, cid)
+    _, params = case_scene(point, preset, config)
     params.update(overrides)
     return params
 
