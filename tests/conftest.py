@@ -40,6 +40,22 @@ def case_params(config: dict, point: dict, preset: str = "smoke", **overrides) -
     return params
 
 
+def keyed_table(table, config: dict):
+    """A copy of a published cases table (a DataFrame) as a table published after content keys
+    (issue 35) would be: each case id keyed for `config` and the current scene template. A stand-in
+    for the restore's tests: the tables in docs/ were published before content keys."""
+    from spreadmap.cases import case_id
+
+    out = table.copy()
+    out["case_id"] = [case_id(r, r["preset"], config, int(r["seed"])) for r in table.to_dict("records")]
+    return out
+
+
+def study_config() -> dict:
+    """The published study's configuration (docs/study/config.yaml), validated."""
+    return spreadmap_config.load(ROOT / "docs" / "study" / "config.yaml")
+
+
 def run_many(jobs: list[tuple[dict, Path]], workers: int = 2) -> list[tuple[dict, dict]]:
     """Run several scenes, two at a time (one per core, single-threaded YADE)."""
     with ThreadPoolExecutor(max_workers=workers) as pool:
