@@ -50,12 +50,16 @@ def is_legacy_id(cid: str) -> bool:
 
 
 def _canonical(value):
-    """A parameter value as it enters the key: floats to KEY_DIGITS significant digits (as text, so
-    that the JSON is the same everywhere), containers recursively; ints, bools, strings, None as they are."""
-    if isinstance(value, bool) or value is None or isinstance(value, (int, str)):
+    """A parameter value as it enters the key: a number as the text of its value to KEY_DIGITS
+    significant digits, the same for an int and a float of one value (a config's `7980` and
+    `7980.0` are one material; an int too long for that, exactly); containers recursively; bools,
+    strings and None as they are."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
         return value
-    if isinstance(value, float):
-        return format(value, f".{KEY_DIGITS}g")
+    if isinstance(value, int) and abs(value) >= 10 ** KEY_DIGITS:
+        return str(value)
+    if isinstance(value, (int, float)):
+        return format(float(value), f".{KEY_DIGITS}g")
     if isinstance(value, dict):
         return {str(k): _canonical(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
