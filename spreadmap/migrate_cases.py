@@ -24,11 +24,12 @@ import re
 from pathlib import Path
 
 from .cases import LEGACY_CASE_ID_PATTERN, keyed_id, readable_id
-from .render import _BLOCK
 
 # The files of a case folder that may record its id, rewritten in place (others, e.g. pictures, are moved untouched).
 TEXT_SUFFIXES = (".py", ".json", ".log", ".txt", ".tsv", ".csv")
 _LEGACY = re.compile(LEGACY_CASE_ID_PATTERN)
+# The PARAMS block of a rendered case.py (spreadmap.render: a pprint of the parameters)
+_RENDERED = re.compile(r"^PARAMS = (\{.*?\})\n# --- end of case parameters ---", re.S | re.M)
 
 
 def legacy_case_folders(cases_dir: Path | str) -> list[Path]:
@@ -49,12 +50,12 @@ def recorded_params(folder: Path) -> tuple[dict | None, str]:
         if isinstance(params, dict):
             return params, name
     try:
-        match = _BLOCK.search((folder / "case.py").read_text())
+        match = _RENDERED.search((folder / "case.py").read_text())
     except OSError:
         return None, "no raw record and no case.py"
     if not match:
         return None, "case.py has no PARAMS block"
-    block = match.group(0).split("PARAMS = ", 1)[1].rsplit("\n# --- end", 1)[0]
+    block = match.group(1)
     try:
         params = ast.literal_eval(block)
     except (ValueError, SyntaxError):
