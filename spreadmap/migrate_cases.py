@@ -24,6 +24,7 @@ import re
 from pathlib import Path
 
 from .cases import LEGACY_CASE_ID_PATTERN, keyed_id, readable_id
+from .files import write_text_atomically
 
 # The files of a case folder that may record its id, rewritten in place (others, e.g. pictures, are moved untouched).
 TEXT_SUFFIXES = (".py", ".json", ".log", ".txt", ".tsv", ".csv")
@@ -93,10 +94,8 @@ def _rewrite_ids(folder: Path, old: str, new: str) -> list[str]:
         replaced = pattern.sub(new, text)
         if replaced != text:
             stat = path.stat()
-            tmp = path.with_name(path.name + ".migrating")
-            tmp.write_text(replaced)
-            os.utime(tmp, ns=(stat.st_atime_ns, stat.st_mtime_ns))
-            os.replace(tmp, path)
+            write_text_atomically(path, replaced)
+            os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
             changed.append(str(path.relative_to(folder)))
     return changed
 
