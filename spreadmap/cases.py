@@ -84,6 +84,13 @@ def keyed_id(params: dict) -> str:
     return f"{readable_id(params['point'], params['preset'], params['seed'])}-{content_key(params)}"
 
 
+def repeat_group(params: dict) -> str:
+    """What the seed repeats of a case share: its readable id without the seed, then the content
+    key of its parameters with the seed left out (two materials' repeats at one point are two groups)."""
+    readable = re.sub(r"-s\d+$", "", readable_id(params["point"], params["preset"], params["seed"]))
+    return f"{readable}-{content_key({**params, 'seed': None})}"
+
+
 def case_scene(point: dict, preset: str, config: dict, seed: int | None = None,
                scene_sha256: str | None = None) -> tuple[str, dict]:
     """(case id, the parameters of the YADE scene script) of a design point at a preset and packing
