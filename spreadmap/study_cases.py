@@ -51,23 +51,23 @@ def planned_cases(config: dict, lds_points: int = 0, scene_sha256: str | None = 
                               case_id(row, preset or config["preset"], config, seed, sha), True)
 
 
-def planned_sweeps(config: dict) -> dict[str, list[tuple[str, dict]]]:
+def planned_sweeps(config: dict, scene_sha256: str | None = None) -> dict[str, list[tuple[str, dict]]]:
     """{"lds": [(case id, label)], "lattice": [...]} for the sweeps the config has, with the labels
-    of the workflow's tables."""
+    of the workflow's tables (ids for the template of hash scene_sha256; default: the shipped one)."""
     plan = {name: [] for name in ("lds", "lattice") if name in (config.get("sweeps") or {})}
-    for case in planned_cases(config):
+    for case in planned_cases(config, scene_sha256=scene_sha256):
         plan[case.sweep].append((case.case_id, {"sweep": case.sweep, **case.label}))
     return plan
 
 
-def loop_cases(config: dict, steps: list[dict]) -> list[tuple[str, dict]]:
+def loop_cases(config: dict, steps: list[dict], scene_sha256: str | None = None) -> list[tuple[str, dict]]:
     """The main job's loop so far as (case id, label), in run order, from its step records (the
     converge checkpoints, ordered by n): the LDS start, then each step's next batch; labels as the
     workflow's converge table (`sweep` converge, `index`, `batch`, `lds`)."""
     grow = config.get("converge") or {}
     start, batch = int(grow.get("start", 32)), int(grow.get("batch", 16))
     preset = ((config.get("sweeps") or {}).get("lds") or {}).get("preset") or config["preset"]
-    seed, sha = config["scene"]["seed"], template_sha256()
+    seed, sha = config["scene"]["seed"], template_sha256() if scene_sha256 is None else scene_sha256
     ids = [c.case_id for c in planned_cases(config, lds_points=start, scene_sha256=sha) if c.sweep == "lds"][:start]
     for step in sorted(steps, key=lambda s: int(s["n"])):
         ids += [case_id(point, preset, config, seed, sha) for point in step.get("next_batch", [])]
@@ -92,7 +92,7 @@ def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.D
                        [cases / cid / "benchmark.tsv" for cid, _ in done], [label for _, label in done])
 
 
-def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame]) -> dict[str, float]:
+def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame], scene_sha256: str | None = None) -> dict[str, float]:
     """Per sweep: the predicted CPU hours of its planned cases not yet finished, from the planned-cost
     law (spreadmap.convergence.cost) calibrated to the finished cases' measured CPU (this machine's
     speed); a case shared by two sweeps counts in each."""
@@ -102,7 +102,7 @@ def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame]) -> dict[str, 
     # a table published before content keys (issue 35) names its cases by their readable part only
     legacy = {cid for cid in done if is_legacy_id(cid)}
     todo: dict[str, dict[str, dict]] = {name: {} for name in tables}
-    for case in planned_cases(config):
+    for case in planned_cases(config, scene_sha256=scene_sha256):
         if case.sweep in todo and case.case_id not in done and readable_part(case.case_id) not in legacy:
             todo[case.sweep][case.case_id] = case.point
     from spreadmap.convergence.cost import PlannedCost  # here: the workflow's registry imports this module

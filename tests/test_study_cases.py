@@ -287,3 +287,36 @@ def test_published_heldout_scores_recompute_from_the_cases_and_the_predictions(c
         assert stated["coverage_low"] == pytest.approx(ci.low) and stated["mean_z2"] == pytest.approx(np.mean(z ** 2))
         rows = score[score["target"] == target].set_index("name")
         np.testing.assert_allclose(rows.loc[z.index, "z"], z, rtol=1e-9)
+
+
+def test_publishing_names_cases_by_the_workflow_directorys_own_template(tmp_path):
+    """tools/publish_study.py keys the planned cases with the scene template of the workflow directory
+    it publishes (which may be another version than this repository's): a case finished there is
+    published, and one at the same design point under another content id (this repository's
+    template, say) is not, and is named on stderr."""
+    import subprocess
+    import sys
+
+    from spreadmap.render import template_sha256
+
+    wf = make_workflow(tmp_path, {"sweeps": {"lds": {"seed": 42, "partitions": [3]}}})
+    template = wf / "yade_scripts" / "spreading_case.py"
+    template.write_text(template.read_text() + "# another version of the scene\n")
+    cfg = spreadmap_config.load(wf / "config.yaml")
+    theirs = planned_sweeps(cfg, scene_sha256=template_sha256(template))["lds"]
+    ours = planned_sweeps(cfg)["lds"]
+    assert [readable_part(c) for c, _ in theirs] == [readable_part(c) for c, _ in ours]
+    assert not {c for c, _ in theirs} & {c for c, _ in ours}
+    points = {readable_part(c.case_id): {n: c.point[n] for n in NAMES} for c in planned_cases(cfg)}
+    for cid in (theirs[0][0], ours[1][0]):  # finished: the first under their template, the second under ours
+        case = wf / "results" / "cases" / cid
+        case.mkdir(parents=True)
+        (case / "metrics.json").write_text(json.dumps(_metrics(cid, points[readable_part(cid)], cfg["preset"], 1)))
+        (case / "benchmark.tsv").write_text("s\th:m:s\tmax_rss\n10\t0:00:10\t200\n")
+    run = subprocess.run([sys.executable, str(ROOT / "tools" / "publish_study.py"), str(wf), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    published = pd.read_csv(tmp_path / "out" / "cases_lds.csv")
+    assert list(published["case_id"]) == [theirs[0][0]]
+    assert f"1 case folders of {wf} are at planned design points but under other content ids" in run.stderr
+    assert ours[1][0] in run.stderr
