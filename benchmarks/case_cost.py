@@ -52,9 +52,8 @@ CSV_COLUMNS = ["preset", "point", "seed", "case_id", "outcome", "status", "reaso
 
 def build_jobs(config: dict, points: list[str], presets: list[str], seeds: list[int], base: Path) -> list[dict]:
     """One job per (point, seed, preset), presets innermost: the interleaved order."""
-    from spreadmap.cases import case_id, rounded
+    from spreadmap.cases import case_scene
     from spreadmap.render import template_sha256
-    from spreadmap.scene import scene_parameters
 
     sha = template_sha256()
     jobs = []
@@ -62,8 +61,7 @@ def build_jobs(config: dict, points: list[str], presets: list[str], seeds: list[
         point = config["fidelity"]["points"][name]
         for seed in seeds:
             for preset in presets:
-                cid = case_id(point, preset, seed)
-                params = {**scene_parameters(rounded(point), preset, config, cid, seed), "scene_sha256": sha}
+                cid, params = case_scene(point, preset, config, seed, sha)
                 jobs.append({"point": name, "preset": preset, "seed": seed, "params": params,
                              "workdir": str(base / cid)})
     return jobs

@@ -27,14 +27,18 @@ import pandas as pd  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from spreadmap import config as spreadmap_config  # noqa: E402
+from spreadmap.cases import repeat_group  # noqa: E402
 from spreadmap.metrics import measure  # noqa: E402
 
 MEASURES = ("mfr", "pd", "layer_packing", "coverage", "roughness_d", "thickness_ratio")
 
 
-def point_of(path: Path) -> str:
-    """The design point of a case directory: its name without the packing seed's `-s<n>`."""
-    return re.sub(r"-s\d+$", "", path.parent.name)
+def point_of(path: Path, raw: dict) -> str:
+    """The design point of a case: what its seed repeats share (spreadmap.cases.repeat_group, from the
+    raw record's parameters), else its directory's name without the packing seed's `-s<n>` (and key)."""
+    if isinstance(raw.get("params"), dict) and {"point", "preset", "seed"} <= set(raw["params"]):
+        return repeat_group(raw["params"])
+    return re.sub(r"-s\d+(-[0-9a-f]{8})?$", "", path.parent.name)
 
 
 def pooled(table: pd.DataFrame, column: str, level: float = 0.9) -> tuple[float, float, float, int]:
@@ -63,7 +67,7 @@ def main(argv=None) -> int:
         raw = json.loads(path.read_text())
         if raw.get("status") != "ok":
             continue
-        rows.append({"point": point_of(path), **measure(raw, settings)})
+        rows.append({"point": point_of(path, raw), **measure(raw, settings)})
     table = pd.DataFrame(rows)
     out = []
     for m in MEASURES:

@@ -16,6 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from spreadmap.cases import repeat_group  # noqa: E402
+
 PHASES = ("settle", "relax", "approach", "window")
 
 
@@ -37,7 +40,9 @@ def main(argv=None) -> int:
         raw = json.loads(path.read_text())
         if raw.get("status") != "ok" or "phase_cost" not in raw:
             continue
-        name = re.sub(r"-s\d+$", "", path.parent.name)
+        params = raw.get("params") or {}
+        name = (repeat_group(params) if {"point", "preset", "seed"} <= set(params)  # seed repeats of one content
+                else re.sub(r"-s\d+(-[0-9a-f]{8})?$", "", path.parent.name))
         groups.setdefault(name, []).append(phase_steps(raw))
     print(f"{'cases':40} {'n':>2} {'steps':>8}  " + " ".join(f"{p:>9}" for p in PHASES))
     for name, rows in sorted(groups.items()):

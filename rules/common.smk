@@ -1,17 +1,21 @@
 # Parse-time set-up: validate the configuration and register every case the targets can ask for.
 # Per-case values reach the jobs as params from this registry (never through a shared table file,
-# which would re-run every case whenever the table grows). A case is its content (design point,
-# preset, packing seed): the same content asked for by two sets is one case, run once.
+# which would re-run every case whenever the table grows). A case is its content (every parameter the
+# YADE script receives: design point, preset values, material, scene, packing seed, template hash;
+# spreadmap.cases): the same content asked for by two sets is one case, run once, and two contents
+# (two materials, two scene versions) are two cases side by side in results/cases/.
 import json
 import os
+import sys
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import CASE_ID_PATTERN, case_id, rounded
+from spreadmap.cases import CASE_ID_PATTERN, case_scene, rounded
 from spreadmap.design import NAMES
 from spreadmap.fidelity_plan import knob_cases, knob_presets, preset_cases
 from spreadmap.sampling import chosen_points
 from spreadmap.render import template_sha256
-from spreadmap.scene import UnsafeTimeStep, scene_parameters
+from spreadmap.migrate_cases import legacy_case_folders
+from spreadmap.scene import UnsafeTimeStep
 from spreadmap.study_cases import loop_labels, planned_cases
 from spreadmap.substrate import floor_label
 
@@ -23,6 +27,7 @@ except spreadmap_config.ConfigError as error:
 RETRIES = 1  # a crash or a timeout is tried once more, then recorded as failed (a refusal: at once)
 QUICK_FIRST = 10**8  # scheduling priority of the per-case jobs that take a second (render, metrics); above any run's
 CASES = {}  # case id -> scene parameters of the YADE script
+CASE_OF = {}  # (rounded design point, preset, seed) -> case id under this config (the content is derived once)
 SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list of (case id, label)
 RANGES = config.get("ranges")
 SCENE_SHA256 = template_sha256()
@@ -31,16 +36,18 @@ FLOOR = floor_label(config)  # the floor the cases are spread on, named on every
 
 
 def add_case(point, preset=None, seed=None):
-    """The case id of a design point at a preset and packing seed; its scene is derived once."""
+    """The case id of a design point at a preset and packing seed (its content key included)."""
     preset = preset or config["preset"]
     seed = config["scene"]["seed"] if seed is None else seed
-    cid = case_id(point, preset, seed)
-    if cid not in CASES:
+    asked = (tuple(rounded(point).values()), preset, int(seed))
+    if asked not in CASE_OF:
         try:
-            CASES[cid] = {**scene_parameters(rounded(point), preset, config, cid, seed), "scene_sha256": SCENE_SHA256}
+            cid, params = case_scene(point, preset, config, seed, SCENE_SHA256)
         except (UnsafeTimeStep, ValueError) as error:
             raise WorkflowError(f"spreadmap: case refused before anything ran: {error}") from None
-    return cid
+        CASES.setdefault(cid, params)
+        CASE_OF[asked] = cid
+    return CASE_OF[asked]
 
 
 def case_cost_priority(wildcards):
@@ -67,8 +74,19 @@ def lds_case_ids(n):
     return LDS_SEQUENCE[:n]
 
 
+_legacy = legacy_case_folders("results/cases")
+if _legacy:  # results of a run before content keys: not re-used until migrated (never deleted)
+    print(f"spreadmap: {len(_legacy)} case folders in results/cases/ have ids without a content key (before "
+          f"issue 35; e.g. {_legacy[0].name}); `python tools/migrate_case_ids.py .` renames those it can key "
+          f"so that they are re-used", file=sys.stderr)
+
+try:
+    _planned = list(planned_cases(config, lds_points=(config.get("converge") or {}).get("budget", 0),
+                                  scene_sha256=SCENE_SHA256))
+except (UnsafeTimeStep, ValueError) as error:
+    raise WorkflowError(f"spreadmap: case refused before anything ran: {error}") from None
 LDS_SEQUENCE = []  # case ids of the LDS sequence up to the larger of the sweep and the converge budget
-for _case in planned_cases(config, lds_points=(config.get("converge") or {}).get("budget", 0)):
+for _case in _planned:
     if _case.sweep == "lds":
         LDS_SEQUENCE.append(add_case(_case.point, preset=_case.preset))
     if _case.in_sweep:

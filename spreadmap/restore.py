@@ -7,12 +7,17 @@ rules/metrics.smk wrote to its metrics.json), its labels in that table (sweep, i
 and its benchmark (wall time, peak memory). A restored case gets back its metrics.json and
 benchmark.tsv, plus restored.json saying where they came from; its raw YADE record is not
 published and stays missing, so the workflow (rules/common.smk, `case_raw_input`) does not ask for
-it. A case directory that holds a raw record is never touched: a real result wins over a restored
-one. The loop's step records (converge/steps/step_N.json) are restored beside the cases, with
-modification times in the order the workflow made them (cases first, then each step), so that
-Snakemake sees them up to date. Every published file is checked against its folder's SHA256SUMS
-(spreadmap/checksums.py) before anything is restored from it: a table that changed since it was
-published is refused, naming the file and how to get it back or re-publish it.
+it. A row is restored under its own case id, which carries the content key of the scene it was run
+with (spreadmap.cases): the workflow re-uses it only when its own configuration and template give
+the same key, so a published case is never taken for a case of another material or scene. A table
+whose ids have no content key (published before issue 35) does not say which scene its cases were
+run with: it is refused, naming the table, before anything is restored. A case directory that
+holds a raw record is never touched: a real result wins over a restored one. The loop's step
+records (converge/steps/step_N.json) are restored beside the cases, with modification times in the
+order the workflow made them (cases first, then each step), so that Snakemake sees them up to date.
+Every published file is checked against its folder's SHA256SUMS (spreadmap/checksums.py) before
+anything is restored from it: a table that changed since it was published is refused, naming the
+file and how to get it back or re-publish it.
 """
 from __future__ import annotations
 
@@ -20,10 +25,12 @@ import io
 import json
 import math
 import os
+import re
 from pathlib import Path
 
 import pandas as pd
 
+from .cases import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, readable_id
 from .checksums import sha256, verified_bytes
 from .convergence.stepper import step_number
 from .files import write_text_atomically
@@ -34,6 +41,35 @@ LABEL_COLUMNS = ("sweep", "index", "k", "index_in_lattice", "name", "batch", "ld
 # Columns that come from Snakemake's benchmark of the YADE run (spreadmap.table.read_benchmark).
 BENCHMARK_COLUMNS = {"benchmark_s": "s", "max_rss_mb": "max_rss"}
 RESTORED = "restored.json"
+
+
+class UnkeyedTableError(ValueError):
+    """A published cases table whose rows cannot be restored as cases of a known scene (ids without
+    a content key, or ids that do not name the row's own design point): one line naming the table
+    and what to do."""
+
+
+def check_case_ids(table: pd.DataFrame, table_path) -> None:
+    """Refuse a table unless every row's case id is a content id (spreadmap.cases.CASE_ID_PATTERN)
+    naming the row's own preset, design point and seed."""
+    ids = table["case_id"].astype(str)
+    legacy = ids.str.fullmatch(LEGACY_CASE_ID_PATTERN)
+    if legacy.any():
+        raise UnkeyedTableError(
+            f"{table_path}: {int(legacy.sum())} of its {len(table)} cases have ids without a content key (published "
+            f"before issue 35), so the material, scene and template they were run with are unknown and they are not "
+            f"restored as cases of any scene; let the workflow run them, or publish the table again from a run with "
+            f"content ids (tools/publish_study.py)")
+    for i, (cid, row) in enumerate(zip(ids, table.to_dict("records"))):
+        if not re.fullmatch(CASE_ID_PATTERN, cid):
+            raise UnkeyedTableError(f"{table_path}: row {i}: {cid!r} is not a case id; the table is not restored")
+        try:
+            named = readable_id(row, row["preset"], int(row["seed"]))
+        except (KeyError, TypeError, ValueError):
+            named = None
+        if not cid.startswith(f"{named}-"):
+            raise UnkeyedTableError(f"{table_path}: row {i}: case id {cid} does not name the row's own preset, design "
+                                    f"point and seed ({named}); the table is not restored")
 
 
 def _json_value(value):
@@ -79,6 +115,7 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
         table = pd.read_csv(io.BytesIO(data))
         if "case_id" not in table.columns:
             raise ValueError(f"{table_path}: not a cases table (no case_id column)")
+        check_case_ids(table, table_path)
         checked.append((table_path, table, sha256(data)))
     for table_path, table, sha in checked:
         for i, row in enumerate(table.to_dict("records")):

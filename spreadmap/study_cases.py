@@ -13,8 +13,9 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from spreadmap.cases import case_id
+from spreadmap.cases import case_id, is_legacy_id, readable_part
 from spreadmap.design import NAMES
+from spreadmap.render import template_sha256
 from spreadmap.sampling import halton, lattice
 from spreadmap.table import build_table
 
@@ -29,45 +30,47 @@ class PlannedCase(NamedTuple):
     in_sweep: bool  # False for an LDS point past the sweep (there for the converge budget)
 
 
-def planned_cases(config: dict, lds_points: int = 0) -> Iterator[PlannedCase]:
+def planned_cases(config: dict, lds_points: int = 0, scene_sha256: str | None = None) -> Iterator[PlannedCase]:
     """The cases of the config's sweeps in the workflow's order: the LDS sequence up to the larger of
     its sweep and `lds_points` (the workflow's converge.budget), then the lattices by increasing k
-    (a case shared by two lattices comes under each)."""
+    (a case shared by two lattices comes under each). Case ids are those of the scene template
+    whose hash is scene_sha256 (default: the shipped template's)."""
     sweeps = config.get("sweeps") or {}
     ranges, seed = config.get("ranges"), config["scene"]["seed"]
+    sha = template_sha256() if scene_sha256 is None else scene_sha256
     if "lds" in sweeps:
         preset, size = sweeps["lds"].get("preset"), max(sweeps["lds"]["partitions"])
         for row in halton(max(size, lds_points), sweeps["lds"]["seed"], ranges).to_dict("records"):
             yield PlannedCase("lds", row, preset, {"index": int(row["index"])},
-                              case_id(row, preset or config["preset"], seed), int(row["index"]) < size)
+                              case_id(row, preset or config["preset"], config, seed, sha), int(row["index"]) < size)
     if "lattice" in sweeps:
         preset = sweeps["lattice"].get("preset")
         rows = [(k, row) for k in sorted(set(sweeps["lattice"]["k"])) for row in lattice(k, ranges).to_dict("records")]
         for n, (k, row) in enumerate(rows):
             yield PlannedCase("lattice", row, preset, {"index": n, "k": k, "index_in_lattice": int(row["index"])},
-                              case_id(row, preset or config["preset"], seed), True)
+                              case_id(row, preset or config["preset"], config, seed, sha), True)
 
 
-def planned_sweeps(config: dict) -> dict[str, list[tuple[str, dict]]]:
+def planned_sweeps(config: dict, scene_sha256: str | None = None) -> dict[str, list[tuple[str, dict]]]:
     """{"lds": [(case id, label)], "lattice": [...]} for the sweeps the config has, with the labels
-    of the workflow's tables."""
+    of the workflow's tables (ids for the template of hash scene_sha256; default: the shipped one)."""
     plan = {name: [] for name in ("lds", "lattice") if name in (config.get("sweeps") or {})}
-    for case in planned_cases(config):
+    for case in planned_cases(config, scene_sha256=scene_sha256):
         plan[case.sweep].append((case.case_id, {"sweep": case.sweep, **case.label}))
     return plan
 
 
-def loop_cases(config: dict, steps: list[dict]) -> list[tuple[str, dict]]:
+def loop_cases(config: dict, steps: list[dict], scene_sha256: str | None = None) -> list[tuple[str, dict]]:
     """The main job's loop so far as (case id, label), in run order, from its step records (the
     converge checkpoints, ordered by n): the LDS start, then each step's next batch; labels as the
     workflow's converge table (`sweep` converge, `index`, `batch`, `lds`)."""
     grow = config.get("converge") or {}
     start, batch = int(grow.get("start", 32)), int(grow.get("batch", 16))
     preset = ((config.get("sweeps") or {}).get("lds") or {}).get("preset") or config["preset"]
-    seed = config["scene"]["seed"]
-    ids = [c.case_id for c in planned_cases(config, lds_points=start) if c.sweep == "lds"][:start]
+    seed, sha = config["scene"]["seed"], template_sha256() if scene_sha256 is None else scene_sha256
+    ids = [c.case_id for c in planned_cases(config, lds_points=start, scene_sha256=sha) if c.sweep == "lds"][:start]
     for step in sorted(steps, key=lambda s: int(s["n"])):
-        ids += [case_id(point, preset, seed) for point in step.get("next_batch", [])]
+        ids += [case_id(point, preset, config, seed, sha) for point in step.get("next_batch", [])]
     is_lds = max(steps, key=lambda s: int(s["n"]))["is_lds"] if steps else [True] * len(ids)
     return list(zip(ids, loop_labels(is_lds[:len(ids)], start, batch)))
 
@@ -89,16 +92,18 @@ def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.D
                        [cases / cid / "benchmark.tsv" for cid, _ in done], [label for _, label in done])
 
 
-def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame]) -> dict[str, float]:
+def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame], scene_sha256: str | None = None) -> dict[str, float]:
     """Per sweep: the predicted CPU hours of its planned cases not yet finished, from the planned-cost
     law (spreadmap.convergence.cost) calibrated to the finished cases' measured CPU (this machine's
     speed); a case shared by two sweeps counts in each."""
     nonempty = [t for t in tables.values() if len(t)]
     finished = pd.concat(nonempty, ignore_index=True) if nonempty else pd.DataFrame()
     done = set(finished["case_id"]) if "case_id" in finished else set()
+    # a table published before content keys (issue 35) names its cases by their readable part only
+    legacy = {cid for cid in done if is_legacy_id(cid)}
     todo: dict[str, dict[str, dict]] = {name: {} for name in tables}
-    for case in planned_cases(config):
-        if case.case_id not in done and case.sweep in todo:
+    for case in planned_cases(config, scene_sha256=scene_sha256):
+        if case.sweep in todo and case.case_id not in done and readable_part(case.case_id) not in legacy:
             todo[case.sweep][case.case_id] = case.point
     from spreadmap.convergence.cost import PlannedCost  # here: the workflow's registry imports this module
 

@@ -12,11 +12,10 @@ import pytest
 from dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import case_id, rounded
+from spreadmap.cases import case_scene
 from spreadmap.files import write_text_atomically
 from spreadmap.launcher import run_case
 from spreadmap.render import render
-from spreadmap.scene import scene_parameters
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -36,10 +35,25 @@ def run_scene(params: dict, workdir: Path) -> tuple[dict, dict]:
 
 
 def case_params(config: dict, point: dict, preset: str = "smoke", **overrides) -> dict:
-    cid = case_id(point, preset, config["scene"]["seed"])
-    params = scene_parameters(rounded(point), preset, config, cid)
+    _, params = case_scene(point, preset, config)
     params.update(overrides)
     return params
+
+
+def keyed_table(table, config: dict):
+    """A copy of a published cases table (a DataFrame) as a table published after content keys
+    (issue 35) would be: each case id keyed for `config` and the current scene template. A stand-in
+    for the restore's tests: the tables in docs/ were published before content keys."""
+    from spreadmap.cases import case_id
+
+    out = table.copy()
+    out["case_id"] = [case_id(r, r["preset"], config, int(r["seed"])) for r in table.to_dict("records")]
+    return out
+
+
+def study_config() -> dict:
+    """The published study's configuration (docs/study/config.yaml), validated."""
+    return spreadmap_config.load(ROOT / "docs" / "study" / "config.yaml")
 
 
 def run_many(jobs: list[tuple[dict, Path]], workers: int = 2) -> list[tuple[dict, dict]]:

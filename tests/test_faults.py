@@ -26,7 +26,7 @@ import warnings
 
 import pandas as pd
 import pytest
-from conftest import ROOT, make_workflow, planned_jobs, snakemake
+from conftest import ROOT, keyed_table, make_workflow, planned_jobs, snakemake, study_config
 
 from spreadmap.checksums import PublishedFileError, check_folder, republish_if_listed, verified_bytes, write_manifest
 from spreadmap.launcher import finished_simulation
@@ -138,7 +138,7 @@ def published(tmp_path):
     """A small published study folder: 5 cases of the LDS table and two loop steps, with SHA256SUMS."""
     folder = tmp_path / "published"
     (folder / "converge" / "steps").mkdir(parents=True)
-    table = pd.read_csv(STUDY / "cases_lds.csv").head(5)
+    table = keyed_table(pd.read_csv(STUDY / "cases_lds.csv").head(5), study_config())
     table.to_csv(folder / "cases_lds.csv", index=False)
     for name in ("step_32.json", "step_48.json"):
         shutil.copyfile(STUDY / "converge" / "steps" / name, folder / "converge" / "steps" / name)
@@ -228,7 +228,7 @@ def test_a_resume_from_a_published_csv_checks_it_and_a_rewrite_re_publishes_it(p
 
 def test_a_table_without_a_published_checksum_is_refused(tmp_path):
     table = tmp_path / "cases_x.csv"
-    pd.read_csv(STUDY / "cases_lds.csv").head(2).to_csv(table, index=False)
+    keyed_table(pd.read_csv(STUDY / "cases_lds.csv").head(2), study_config()).to_csv(table, index=False)
     with pytest.raises(PublishedFileError, match=r"no SHA256SUMS beside it .*tools/publish_checksums.py"):
         restore_cases([table], tmp_path / "work", mtime=1.0e9)
     write_manifest(tmp_path)

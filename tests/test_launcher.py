@@ -4,10 +4,9 @@ that reaches the results table and the run summary. The logs below are what Debi
 import pandas as pd
 import pytest
 
-from spreadmap.cases import case_id
+from spreadmap.cases import case_scene
 from spreadmap.launcher import failure_reason, failure_record, retry_wanted
 from spreadmap.metrics import case_metrics
-from spreadmap.scene import scene_parameters
 from spreadmap.summary import run_summary, summary_text
 from spreadmap.table import build_table
 
@@ -34,7 +33,7 @@ MemoryError: std::bad_alloc
 
 
 def failed_run(tmp_path, config, log_text, code, outcome):
-    params = scene_parameters(POINT, "smoke", config, case_id(POINT, "smoke", 1))
+    _, params = case_scene(POINT, "smoke", config, 1)
     log = tmp_path / "run.log"
     log.write_text(log_text)
     result = {"exit_code": code, "outcome": outcome, "wall_time": 2.5,

@@ -10,7 +10,7 @@ import pytest
 from conftest import ROOT, make_workflow, snakemake
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import case_id
+from spreadmap.cases import case_id, readable_id, readable_part
 from spreadmap.design import NAMES
 from spreadmap.study_cases import cpu_hours_to_go, finished_table, planned_cases, planned_sweeps, progress
 from spreadmap.table import usable
@@ -47,15 +47,15 @@ def test_planned_cases_go_past_the_lds_sweep_for_the_converge_budget(config):
     assert [c.in_sweep for c in lds] == [True] * 6 + [False] * 4
     assert [c.sweep for c in cases] == ["lds"] * 10 + ["lattice"] * 16
     assert all(c.preset == "smoke" and c.point["index"] == c.label["index"] for c in lds)
-    assert all(c.case_id == case_id(c.point, c.preset or cfg["preset"], cfg["scene"]["seed"]) for c in cases)
+    assert all(c.case_id == case_id(c.point, c.preset or cfg["preset"], cfg) for c in cases)
     plan = planned_sweeps(cfg)
     assert plan["lds"] == [(c.case_id, {"sweep": "lds", **c.label}) for c in lds[:6]]
     assert [cid for cid, _ in plan["lattice"]] == [c.case_id for c in cases if c.sweep == "lattice"]
     assert [c.case_id for c in planned_cases(cfg, lds_points=3)] == [c.case_id for c in cases if c.in_sweep]
 
 
-def _metrics(point: dict, preset: str, seed: int, status: str = "ok", cpu: float = 60.0) -> dict:
-    return {"case_id": case_id(point, preset, seed), **point, "preset": preset, "seed": seed, "status": status,
+def _metrics(cid: str, point: dict, preset: str, seed: int, status: str = "ok", cpu: float = 60.0) -> dict:
+    return {"case_id": cid, **point, "preset": preset, "seed": seed, "status": status,
             "mfr": 0.4, "pd": 0.35, "regime": "normal", "flagged": False, "flag_reason": "", "reason": "", "cpu_time": cpu}
 
 
@@ -71,7 +71,7 @@ def test_the_finished_table_holds_the_finished_cases_in_plan_order(config, tmp_p
         case = tmp_path / "results" / "cases" / cid
         case.mkdir(parents=True, exist_ok=True)
         status = "failed" if cid == plan["lds"][5][0] else "ok"
-        (case / "metrics.json").write_text(json.dumps(_metrics(point, "default", 1, status, cpu=3600.0)))
+        (case / "metrics.json").write_text(json.dumps(_metrics(cid, point, "default", 1, status, cpu=3600.0)))
         (case / "benchmark.tsv").write_text("s\th:m:s\tmax_rss\n10\t0:00:10\t200\n")
     lds = finished_table(tmp_path, plan["lds"])
     assert list(lds["index"]) == [1, 4, 5]
@@ -136,14 +136,15 @@ def test_published_cases_are_planned_cases_as_simulated(published):
     cfg, plan = published
     for name, cases in plan.items():
         table = pd.read_csv(DOCS / f"cases_{name}.csv")
-        labels = {cid: label for cid, label in cases} if name == "lds" else None
-        planned = {cid for cid, _ in cases}
+        labels = {readable_part(cid): label for cid, label in cases} if name == "lds" else None
+        planned = {readable_part(cid) for cid, _ in cases}
         assert set(table["case_id"]) <= planned, name
         assert list(table["index"]) == sorted(table["index"]), name
         if labels:
             assert all(labels[c] == {"sweep": "lds", "index": i} for c, i in zip(table["case_id"], table["index"]))
-        # the design point each case simulated is the planned point (to the case id's rounding)
-        ids = [case_id(r, r["preset"], r["seed"]) for r in table.to_dict("records")]
+        # the design point each case simulated is the planned point (to the case id's rounding);
+        # the published ids are from before content keys (issue 35): their readable part alone
+        ids = [readable_id(r, r["preset"], r["seed"]) for r in table.to_dict("records")]
         assert ids == list(table["case_id"]), name
         assert set(table["status"]) <= {"ok", "failed"}
 
@@ -177,9 +178,9 @@ def test_the_loops_cases_so_far_follow_its_steps(config):
              {"n": 4, "next_batch": [lds[4].point, extra]}]
     steps[0]["next_batch"] = [lds[5].point, extra]
     got = loop_cases(cfg, steps)
-    seed, preset = cfg["scene"]["seed"], cfg["preset"]
-    assert [cid for cid, _ in got] == [c.case_id for c in lds[:5]] + [case_id(extra, preset, seed), lds[5].case_id,
-                                                                     case_id(extra, preset, seed)]
+    preset = cfg["preset"]
+    assert [cid for cid, _ in got] == [c.case_id for c in lds[:5]] + [case_id(extra, preset, cfg), lds[5].case_id,
+                                                                     case_id(extra, preset, cfg)]
     assert [lab["batch"] for _, lab in got] == [0, 0, 0, 0, 1, 1, 2, 2]
     assert [lab["lds"] for _, lab in got] == [True] * 5 + [False, True, False]
 
@@ -193,7 +194,7 @@ def test_published_loop_cases_are_its_steps_cases(published):
     cfg, _ = published
     steps = [json.loads(s.read_text()) for s in (DOCS / "converge" / "steps").glob("step_*.json")]
     table = pd.read_csv(DOCS / "cases_converge.csv")
-    planned = {cid: label for cid, label in loop_cases(cfg, steps)}
+    planned = {readable_part(cid): label for cid, label in loop_cases(cfg, steps)}  # published before content keys
     assert list(table["index"]) == sorted(table["index"])
     for row in table.to_dict("records"):
         label = planned[row["case_id"]]
@@ -202,7 +203,8 @@ def test_published_loop_cases_are_its_steps_cases(published):
     assert last["n"] <= len(table) <= (last.get("next_n") or last["n"])  # a stopped loop has no next batch
     stepped = table.iloc[:last["n"]]
     assert stepped["cpu_time"].sum() / 3600 == pytest.approx(last["cpu_hours"], rel=1e-6)
-    assert set(table["case_id"].iloc[last["n"]:]) <= {cid for cid, _ in loop_cases(cfg, steps)[last["n"]:]}
+    after = loop_cases(cfg, steps)[last["n"]:]
+    assert set(table["case_id"].iloc[last["n"]:]) <= {readable_part(cid) for cid, _ in after}
 
 
 def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(published):
@@ -286,3 +288,36 @@ def test_published_heldout_scores_recompute_from_the_cases_and_the_predictions(c
         assert stated["coverage_low"] == pytest.approx(ci.low) and stated["mean_z2"] == pytest.approx(np.mean(z ** 2))
         rows = score[score["target"] == target].set_index("name")
         np.testing.assert_allclose(rows.loc[z.index, "z"], z, rtol=1e-9)
+
+
+def test_publishing_names_cases_by_the_workflow_directorys_own_template(tmp_path):
+    """tools/publish_study.py keys the planned cases with the scene template of the workflow directory
+    it publishes (which may be another version than this repository's): a case finished there is
+    published, and one at the same design point under another content id (this repository's
+    template, say) is not, and is named on stderr."""
+    import subprocess
+    import sys
+
+    from spreadmap.render import template_sha256
+
+    wf = make_workflow(tmp_path, {"sweeps": {"lds": {"seed": 42, "partitions": [3]}}})
+    template = wf / "yade_scripts" / "spreading_case.py"
+    template.write_text(template.read_text() + "# another version of the scene\n")
+    cfg = spreadmap_config.load(wf / "config.yaml")
+    theirs = planned_sweeps(cfg, scene_sha256=template_sha256(template))["lds"]
+    ours = planned_sweeps(cfg)["lds"]
+    assert [readable_part(c) for c, _ in theirs] == [readable_part(c) for c, _ in ours]
+    assert not {c for c, _ in theirs} & {c for c, _ in ours}
+    points = {readable_part(c.case_id): {n: c.point[n] for n in NAMES} for c in planned_cases(cfg)}
+    for cid in (theirs[0][0], ours[1][0]):  # finished: the first under their template, the second under ours
+        case = wf / "results" / "cases" / cid
+        case.mkdir(parents=True)
+        (case / "metrics.json").write_text(json.dumps(_metrics(cid, points[readable_part(cid)], cfg["preset"], 1)))
+        (case / "benchmark.tsv").write_text("s\th:m:s\tmax_rss\n10\t0:00:10\t200\n")
+    run = subprocess.run([sys.executable, str(ROOT / "tools" / "publish_study.py"), str(wf), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    published = pd.read_csv(tmp_path / "out" / "cases_lds.csv")
+    assert list(published["case_id"]) == [theirs[0][0]]
+    assert f"1 case folders of {wf} are at planned design points but under other content ids" in run.stderr
+    assert ours[1][0] in run.stderr

@@ -3,6 +3,7 @@ recorded with its reason, a killed run resumes without redoing finished cases.""
 import copy
 import json
 import os
+import re
 import signal
 import subprocess
 import time
@@ -70,7 +71,7 @@ def test_a_failed_case_is_recorded_with_its_reason_and_the_others_finish(tmp_pat
     assert summary["sets"]["points"]["failed"] == 1 and summary["sets"]["lds"]["done"] == 3
     assert "timed out" in summary["sets"]["points"]["problems"][0]["reason"]
     text = (wf / "results" / "sweeps_summary.txt").read_text()
-    assert "broken-f0.3000-d20.000-h60.000-v5.0000-s1: failed: timed out" in text
+    assert re.search(r"broken-f0\.3000-d20\.000-h60\.000-v5\.0000-s1-[0-9a-f]{8}: failed: timed out", text), text
 
 
 def test_killed_run_resumes_without_redoing_finished_cases(tmp_path):
@@ -116,8 +117,7 @@ def test_the_costliest_cases_start_first(tmp_path):
     import re
 
     from spreadmap import config as spreadmap_config
-    from spreadmap.cases import case_id
-    from spreadmap.scene import scene_parameters
+    from spreadmap.cases import case_scene
 
     points = {f"p{i}": {"f": 0.3, "d_um": d, "h_um": 75, "v_mm_s": 10} for i, d in enumerate((50, 45, 40, 35))}
     cfg = copy.deepcopy(FAST_SWEEP)
@@ -126,8 +126,8 @@ def test_the_costliest_cases_start_first(tmp_path):
     config = spreadmap_config.load(wf / "config.yaml")
     work = {}
     for point in points.values():
-        scene = scene_parameters(point, "smoke", config, "x", 1)
-        work[case_id(point, "smoke", 1)] = scene["n_particles"] * scene["estimated_steps"]
+        cid, scene = case_scene(point, "smoke", config, 1)
+        work[cid] = scene["n_particles"] * scene["estimated_steps"]
     assert len(set(work.values())) == 4
     run = snakemake(wf, "points", "--cores", "1")
     assert run.returncode == 0, run.stderr[-3000:]

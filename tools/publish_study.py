@@ -26,7 +26,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from spreadmap import config as cfgmod  # noqa: E402
+from spreadmap.cases import readable_part  # noqa: E402
 from spreadmap.checksums import write_manifest  # noqa: E402
+from spreadmap.render import template_sha256  # noqa: E402
 from spreadmap.study_cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress  # noqa: E402
 from spreadmap.study_summary import summary_markdown  # noqa: E402
 from spreadmap.table import write_table  # noqa: E402
@@ -44,19 +46,36 @@ COPIES = {  # source under the workflow directory -> destination under --out
 }
 
 
+def unmatched_cases(workdir: Path, plan: dict) -> list[str]:
+    """Finished case folders of workdir at a planned design point whose id is none of the plan's."""
+    ids = {cid for cases in plan.values() for cid, _ in cases}
+    points = {readable_part(cid) for cid in ids}
+    folders = sorted(p.parent.name for p in (workdir / "results" / "cases").glob("*/metrics.json"))
+    return [name for name in folders if name not in ids and readable_part(name) in points]
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("workdir", type=Path)
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "study")
     args = ap.parse_args(argv)
     config = cfgmod.load(args.workdir / "config.yaml")
+    # the case ids the workflow directory's own scene template gives (content ids, spreadmap.cases)
+    template = args.workdir / "yade_scripts" / "spreading_case.py"
+    sha = template_sha256(template) if template.exists() else None
     args.out.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(args.workdir / "config.yaml", args.out / "config.yaml")
-    plan = planned_sweeps(config)
+    plan = planned_sweeps(config, scene_sha256=sha)
     tables = {name: finished_table(args.workdir, cases) for name, cases in plan.items()}
+    unmatched = unmatched_cases(args.workdir, plan)
+    if unmatched:
+        print(f"publish_study: {len(unmatched)} case folders of {args.workdir} are at planned design points but under "
+              f"other content ids (another material, scene or spreadmap version than this config and "
+              f"{'its' if sha else 'the shipped'} template give), e.g. {unmatched[0]}; they are not published",
+              file=sys.stderr)
     for name, table in tables.items():
         write_table(table, args.out / f"cases_{name}.csv")
-    done = progress(plan, tables, cpu_hours_to_go(config, tables))
+    done = progress(plan, tables, cpu_hours_to_go(config, tables, scene_sha256=sha))
     write_table(done, args.out / "progress.csv")
     print(done.to_string(index=False))
     missing = []
@@ -77,7 +96,8 @@ def main(argv=None) -> int:
             shutil.copyfile(step, args.out / "converge" / "steps" / step.name)
         if not (args.workdir / "results" / "converge" / "table.csv").exists():  # its cases so far
             records = [json.loads(s.read_text()) for s in steps]
-            write_table(finished_table(args.workdir, loop_cases(config, records)), args.out / "cases_converge.csv")
+            write_table(finished_table(args.workdir, loop_cases(config, records, scene_sha256=sha)),
+                        args.out / "cases_converge.csv")
     if missing:
         print("not yet run:", ", ".join(missing))
     text = summary_markdown(args.out, config.get("ranges"))

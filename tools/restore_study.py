@@ -13,6 +13,11 @@ held-out check's files (heldout/: its points and the predictions made before its
 records are not published: a restored case has no picture, VTK export or re-read of its overlap.
 Check with `snakemake -n` in WORKDIR that only unfinished cases would run.
 
+Each case goes back under its own case id, whose content key names the material, scene and
+template it was run with: the workflow re-uses it only under a config and template that give the
+same key. Tables published before content keys (issue 35) do not record that scene: they are
+refused, naming the table (exit status 2), and nothing is restored.
+
 Every file it reads is first checked against the folder's SHA256SUMS (spreadmap/checksums.py);
 one that changed since it was published stops the restore before anything is written, with a
 message naming the file and how to get it back or re-publish it (exit status 2).
@@ -28,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from spreadmap.checksums import PublishedFileError, verified_bytes  # noqa: E402
 from spreadmap.files import atomic_path  # noqa: E402
-from spreadmap.restore import restore_cases, restore_steps  # noqa: E402
+from spreadmap.restore import UnkeyedTableError, restore_cases, restore_steps  # noqa: E402
 
 
 def write_bytes_atomically(path: Path, data: bytes) -> None:
@@ -60,7 +65,11 @@ def main(argv=None) -> int:
         return 2
     # an hour in the past, so that anything the resumed run makes is newer
     base = time.time() - 3600
-    counts = restore_cases(tables, args.workdir, mtime=base)
+    try:  # refused before anything is written: a table whose cases' scene is not known
+        counts = restore_cases(tables, args.workdir, mtime=base)
+    except UnkeyedTableError as error:
+        print(f"restore_study: refused: {error}", file=sys.stderr)
+        return 2
     steps = restore_steps(step_files, args.workdir, mtime=base)
     for f in held:
         write_bytes_atomically(args.workdir / "heldout" / f.name, held_bytes[f])

@@ -1,0 +1,123 @@
+"""Case folders named before content keys (issue 35) renamed to their content ids, without re-running.
+
+Before issue 35 a case id was `<preset>-f..-d..-h..-v..-s<seed>` (spreadmap.cases.LEGACY_CASE_ID_PATTERN):
+it did not say which material, scene or template version the case was run with. A legacy folder whose
+parameters are recorded in it is keyed exactly: the raw record's `params` (raw.json, or the launcher's
+simulated.json: what the YADE script ran with), else the PARAMS block of its rendered case.py (what it
+was rendered with; a folder with only case.py had not run). Its new id is its old one plus the content
+key of those parameters (spreadmap.cases.content_key), so a case run with the current configuration
+and template is found again by the workflow, and one run with another material or template sits
+beside the current ones under its own id. The id recorded inside its text files (params.case_id, the
+metrics' case_id, the case.py header, the logs' prefixes) is rewritten to the new one; every file
+keeps its modification time, so that Snakemake sees the case as up to date.
+
+A folder it cannot key (no parameters recorded: a case restored from a published table, or one that
+never rendered; parameters that do not name the folder's own case) is left where it is and reported,
+never deleted; so is a folder whose content id is already taken.
+"""
+from __future__ import annotations
+
+import ast
+import json
+import os
+import re
+from pathlib import Path
+
+from .cases import LEGACY_CASE_ID_PATTERN, keyed_id, readable_id
+from .files import write_text_atomically
+
+# The files of a case folder that may record its id, rewritten in place (others, e.g. pictures, are moved untouched).
+TEXT_SUFFIXES = (".py", ".json", ".log", ".txt", ".tsv", ".csv")
+_LEGACY = re.compile(LEGACY_CASE_ID_PATTERN)
+# The PARAMS block of a rendered case.py (spreadmap.render: a pprint of the parameters)
+_RENDERED = re.compile(r"^PARAMS = (\{.*?\})\n# --- end of case parameters ---", re.S | re.M)
+
+
+def legacy_case_folders(cases_dir: Path | str) -> list[Path]:
+    """The folders of cases_dir named by a legacy case id (sorted)."""
+    cases_dir = Path(cases_dir)
+    if not cases_dir.is_dir():
+        return []
+    return sorted(p for p in cases_dir.iterdir() if p.is_dir() and _LEGACY.fullmatch(p.name))
+
+
+def recorded_params(folder: Path) -> tuple[dict | None, str]:
+    """(the parameters a case folder records, where from) or (None, why not)."""
+    for name in ("raw.json", "simulated.json"):
+        try:
+            params = json.loads((folder / name).read_text()).get("params")
+        except (OSError, ValueError, AttributeError):
+            continue
+        if isinstance(params, dict):
+            return params, name
+    try:
+        match = _RENDERED.search((folder / "case.py").read_text())
+    except OSError:
+        return None, "no raw record and no case.py"
+    if not match:
+        return None, "case.py has no PARAMS block"
+    block = match.group(1)
+    try:
+        params = ast.literal_eval(block)
+    except (ValueError, SyntaxError):
+        return None, "case.py's PARAMS block is not a literal"
+    return (params, "case.py") if isinstance(params, dict) else (None, "case.py's PARAMS is not a dict")
+
+
+def new_id(folder: Path) -> tuple[str | None, str]:
+    """(the content id of a legacy case folder, where its parameters came from) or (None, why not)."""
+    params, source = recorded_params(folder)
+    if params is None:
+        return None, source
+    try:
+        named, keyed = readable_id(params["point"], params["preset"], params["seed"]), keyed_id(params)
+        # (a case_id already rewritten to the content id: a migration interrupted before the rename)
+        if named != folder.name or params.get("case_id") not in (folder.name, keyed):
+            return None, f"the parameters in {source} are of case {params.get('case_id')!r}, not of this folder"
+        return keyed, source
+    except (KeyError, TypeError, ValueError) as error:
+        return None, f"the parameters in {source} cannot be keyed ({type(error).__name__}: {error})"
+
+
+def _rewrite_ids(folder: Path, old: str, new: str) -> list[str]:
+    """Replace the old id by the new one in the folder's text files (an id, not a longer id it
+    begins), keeping each file's modification time. Returns the files changed."""
+    pattern = re.compile(re.escape(old) + r"(?![\w.-])")
+    changed = []
+    for path in sorted(folder.rglob("*")):
+        if not path.is_file() or path.suffix not in TEXT_SUFFIXES:
+            continue
+        try:
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError):
+            continue
+        replaced = pattern.sub(new, text)
+        if replaced != text:
+            stat = path.stat()
+            write_text_atomically(path, replaced)
+            os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+            changed.append(str(path.relative_to(folder)))
+    return changed
+
+
+def migrate_case_folders(cases_dir: Path | str, dry_run: bool = False) -> dict:
+    """Rename every legacy case folder of cases_dir that can be keyed to its content id (and the id
+    inside its files); leave the others. Returns {"renamed": [(old, new, source)], "left": [(old, why)]}."""
+    cases_dir = Path(cases_dir)
+    report = {"renamed": [], "left": []}
+    for folder in legacy_case_folders(cases_dir):
+        new, source = new_id(folder)
+        if new is None:
+            report["left"].append((folder.name, source))
+            continue
+        target = cases_dir / new
+        if target.exists():
+            report["left"].append((folder.name, f"{new} exists already"))
+            continue
+        if not dry_run:
+            stat = folder.stat()
+            _rewrite_ids(folder, folder.name, new)
+            folder.rename(target)
+            os.utime(target, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+        report["renamed"].append((folder.name, new, source))
+    return report
