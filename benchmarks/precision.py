@@ -251,6 +251,11 @@ def recount_escaped(raw: dict) -> None:
     x_lo, x_hi = geometry["floor_x"]
     on_floor = (pos[:, 0] >= x_lo) & (pos[:, 0] <= x_hi)
     inside = ((pos[:, 1] >= -r) & (pos[:, 1] <= geometry["width"] + r) & (pos[:, 2] >= geometry["floor_top"] - r))
+    # and thrown far upwards, as the scene counts it (above cloud height + 40 d): without this the
+    # first fed heap's corner case, a 297 d tower with 1,068 spheres above the box, read 0 escaped
+    params = raw.get("params") or {}
+    if "cloud_height" in params and "diameter" in params:
+        inside &= pos[:, 2] <= params["cloud_height"] + 40.0 * params["diameter"]
     raw["escaped_particles"] = int(np.sum(on_floor & ~inside))
 
 
