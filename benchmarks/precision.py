@@ -107,6 +107,9 @@ ARMS = {
     # the same, the spheres dropped 3-7 d ahead of the blade's front face (on the heap's slope,
     # where a long pile's powder joins the heap) instead of at it
     "fed_ahead": {"rev": None, "overrides": {"scene": {"fed_heap": True, "feed_offset_d": 3}}},
+    # the feed as first shipped (commit 480549f): at most two layers a call, the next once they
+    # have fallen (it fell behind at the corner); `fed` is the shipped config's feed
+    "fed_v2": {"rev": "480549f", "overrides": {"scene": {"fed_heap": True, "feed_offset_d": 3}}},
     # the fed heap with twice the standing reserve, at the corner: is 4.7 h^2 enough there?
     "fed_2x": {"rev": None, "overrides": {"scene": {"fed_heap": True, "pile_reserve": 9.4}},
                "points": ["fine_thick_corner"]},

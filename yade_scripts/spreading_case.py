@@ -520,8 +520,8 @@ def freeze_behind(x_rear):
 def feed_heap(x_rear):
     """A heap fed from above (feed_count): while the blade moves, whenever fewer than feed_count
     moving spheres are at or ahead of its rear face (the heap, and what is under the blade), the
-    missing ones (at most two layers' worth per call, the next only once these have fallen onto
-    the heap) are added in a drop zone feed_zone long that starts feed_offset ahead of the blade's
+    missing ones (at most h/d + 1 layers' worth per call, at least two, the next only once these
+    have fallen onto the heap) are added in a drop zone feed_zone long that starts feed_offset ahead of the blade's
     front face, on a lattice of columns along x and rows along y (1.1 d pitch, a seeded shuffle
     and a jitter of 0.04 d): in each column, 1.05 d above the highest sphere centre within
     1.1 d of it in x (so a new sphere overlaps nothing, and falls less than a diameter onto the
@@ -540,7 +540,10 @@ def feed_heap(x_rear):
     xs = [start + R + 0.05 * d + i * pitch for i in range(max(1, int((P["feed_zone"] - d) / pitch) + 1))]
     ys = [R + 0.05 * d + j * pitch for j in range(max(1, int((W - d - 0.1 * d) / pitch) + 1))]
     tops = {x: max([b.state.pos[2] for b in ahead if abs(b.state.pos[0] - x) <= pitch] or [-R]) for x in xs}
-    deficit = min(deficit, 2 * len(xs) * len(ys))  # two layers at a time: the rest at the next call
+    # layers at a time: about what the gap passes while they fall (at h/d 7.5 two layers a call
+    # could not keep up: the heap ran down from 1.8 to 1.4 h^2 in the window), the rest at the next call
+    layers = max(2, int(math.ceil(P["gap"] / d)) + 1)
+    deficit = min(deficit, layers * len(xs) * len(ys))
     placed, layer = 0, 0
     while placed < deficit:
         slots = [(x, y) for x in xs for y in ys]
