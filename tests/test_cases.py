@@ -48,7 +48,7 @@ def _changed(config, path, value):
     (("material", "young_pa"), 1.0e9),
     (("material", "restitution"), 0.5),
     (("scene", "substrate", "kind"), "flat"),
-    (("scene", "fed_heap"), True),
+    (("scene", "fed_heap"), False),  # the shipped scene feeds the heap
     (("scene", "settle_damping"), 0.3),
     (("presets", "default", "width_d"), 4.0),
     (("presets", "default", "dt_factor"), 0.2),
