@@ -17,7 +17,6 @@ never deleted; so is a folder whose content id is already taken.
 """
 from __future__ import annotations
 
-import ast
 import json
 import os
 import re
@@ -25,12 +24,11 @@ from pathlib import Path
 
 from .cases import LEGACY_CASE_ID_PATTERN, keyed_id, readable_id
 from .files import write_text_atomically
+from .render import rendered_params
 
 # The files of a case folder that may record its id, rewritten in place (others, e.g. pictures, are moved untouched).
 TEXT_SUFFIXES = (".py", ".json", ".log", ".txt", ".tsv", ".csv")
 _LEGACY = re.compile(LEGACY_CASE_ID_PATTERN)
-# The PARAMS block of a rendered case.py (spreadmap.render: a pprint of the parameters)
-_RENDERED = re.compile(r"^PARAMS = (\{.*?\})\n# --- end of case parameters ---", re.S | re.M)
 
 
 def legacy_case_folders(cases_dir: Path | str) -> list[Path]:
@@ -51,17 +49,13 @@ def recorded_params(folder: Path) -> tuple[dict | None, str]:
         if isinstance(params, dict):
             return params, name
     try:
-        match = _RENDERED.search((folder / "case.py").read_text())
+        text = (folder / "case.py").read_text()
     except OSError:
         return None, "no raw record and no case.py"
-    if not match:
-        return None, "case.py has no PARAMS block"
-    block = match.group(1)
     try:
-        params = ast.literal_eval(block)
-    except (ValueError, SyntaxError):
-        return None, "case.py's PARAMS block is not a literal"
-    return (params, "case.py") if isinstance(params, dict) else (None, "case.py's PARAMS is not a dict")
+        return rendered_params(text), "case.py"
+    except ValueError as error:
+        return None, f"case.py: {error}"
 
 
 def new_id(folder: Path) -> tuple[str | None, str]:

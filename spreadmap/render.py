@@ -9,6 +9,8 @@ from pathlib import Path
 
 TEMPLATE = Path(__file__).resolve().parent.parent / "yade_scripts" / "spreading_case.py"
 _BLOCK = re.compile(r"(# --- case parameters.*?---\n)PARAMS = \{.*?\n\}\n(# --- end of case parameters ---)", re.S)
+# the PARAMS block of a rendered script (render: a pprint of the parameters before the end marker)
+_RENDERED = re.compile(r"^PARAMS = (\{.*?\})\n# --- end of case parameters ---", re.S | re.M)
 
 
 def template_sha256(template: Path | str = TEMPLATE) -> str:
@@ -28,3 +30,20 @@ def render(params: dict, template: Path | str = TEMPLATE) -> str:
     block = "PARAMS = " + pprint.pformat(params, sort_dicts=False, width=100) + "\n"
     header = f"# --- case parameters of {params['case_id']} (rendered by spreadmap) ---\n"
     return _BLOCK.sub(lambda m: header + block + m.group(2), text, count=1)
+
+
+def rendered_params(text: str) -> dict:
+    """The parameters a script rendered by `render` carries (its PARAMS block read back); ValueError
+    when there is no such block or it is not a literal dict."""
+    import ast
+
+    match = _RENDERED.search(text)
+    if not match:
+        raise ValueError("no PARAMS block")
+    try:
+        params = ast.literal_eval(match.group(1))
+    except (ValueError, SyntaxError):
+        raise ValueError("the PARAMS block is not a literal") from None
+    if not isinstance(params, dict):
+        raise ValueError("PARAMS is not a dict")
+    return params
