@@ -494,6 +494,15 @@ def test_a_pile_that_runs_down_flags_the_case():
     m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
     assert m["flow_trend"] == pytest.approx(-1.0, rel=0.02)
     assert m["flow_trend_z"] == pytest.approx(-1.0 / (2 * 0.45 / math.sqrt(m["n_passed"])), rel=0.02)
-    assert m["flagged"] and "the pile ran down" in m["flag_reason"]
+    # the record's heap (36 spheres in a block 3 d long and 3 d high) still holds at the
+    # window's end, so the fall is named the flow's own, not a run-down
+    assert m["heap_end_h2"] > 0.7
+    assert m["flagged"] and m["flag_reason"].endswith(
+        f"with {m['heap_end_h2']:.2f} h^2 still ahead of the blade: the flow is unsteady, the pile did not run down")
+    # where the heap is below the bound the same fall is a run-down (and the heap's own flag says so)
+    thin = dict(BOUNDS, min_heap_h2=m["heap_end_h2"] + 0.01)
+    reasons = case_metrics(raw, RULES, thin, SETTINGS)["flag_reason"].split("; ")
+    assert reasons[0] == f"flow fell by {-m['flow_trend']:.0%} over the window ({m['flow_trend_z']:.1f} SE): the pile ran down"
+    assert reasons[1].startswith("the heap ahead of the blade fell to")
     steady = dict(BOUNDS, max_flow_decline_z=None)  # null: never flagged for it
     assert not case_metrics(raw, RULES, steady, SETTINGS)["flagged"]

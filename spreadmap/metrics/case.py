@@ -91,6 +91,18 @@ def overlap_by_cause(raw: dict, peak: float, bound: float) -> dict:
     return {"peak_overlap_free": raw["peak_overlap_free"], "peak_overlap_wedged": wedged, "wedged": wedged > bound}
 
 
+def flow_fall_reason(trend: float, trend_z: float, heap_end_h2: float, heap_min: float | None) -> str:
+    """The flag of a flow that fell over the window, with its cause as far as the heap ahead of the
+    blade tells (the text after the last ': ' is the cause the summaries count): a heap that still
+    holds `heap_min` h^2 or more at the window's end did not run down, so the fall is the flow's
+    own (unsteady: a heap that builds or slides, a floor the flow has not settled on); a smaller
+    heap, or none measured, is a pile that ran down."""
+    fell = f"flow fell by {-trend:.0%} over the window ({trend_z:.1f} SE)"
+    if heap_min is not None and math.isfinite(heap_end_h2) and heap_end_h2 >= heap_min:
+        return f"{fell} with {heap_end_h2:.2f} h^2 still ahead of the blade: the flow is unsteady, the pile did not run down"
+    return f"{fell}: the pile ran down"
+
+
 def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict) -> dict:
     """Everything the results table needs from one raw record (ok, blown or failed).
     regime_rules, stability, settings: the config's `regime`, `stability` and `metrics`."""
@@ -146,10 +158,9 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
     if new["peak_overlap_free"] > stability["max_overlap_ratio"]:
         flags.append(f"peak overlap {new['peak_overlap_free']:.3g} R > {stability['max_overlap_ratio']} R")
     z_max = stability.get("max_flow_decline_z", 3.0)
-    if z_max is not None and new["flow_trend_z"] < -z_max:  # nan (no series) compares False
-        flags.append(f"flow fell by {-new['flow_trend']:.0%} over the window ({new['flow_trend_z']:.1f} SE): "
-                     f"the pile ran down")
     heap_min = stability.get("min_heap_h2", MIN_HEAP_H2)
+    if z_max is not None and new["flow_trend_z"] < -z_max:  # nan (no series) compares False
+        flags.append(flow_fall_reason(new["flow_trend"], new["flow_trend_z"], new["heap_end_h2"], heap_min))
     if heap_min is not None and new["heap_end_h2"] < heap_min:  # nan (a failed case) compares False
         flags.append(f"the heap ahead of the blade fell to {new['heap_end_h2']:.2f} h^2 (< {heap_min:g} h^2): "
                      f"the pile ran down")
