@@ -419,6 +419,22 @@ def test_the_overlap_flag_reads_the_free_peak_and_reports_a_wedge(free, wedged, 
     assert m["peak_overlap_ratio"] == max(free, wedged)
 
 
+@pytest.mark.parametrize("wedged,bound,flagged", [
+    (0.174, None, False),   # the largest published wedge, at the default bound (0.25 R): kept
+    (0.26, None, True),     # deeper than any wedge of a sound step: flagged
+    (0.26, 0.3, False),     # a looser bound set in the config
+    (0.12, 0.1, True),      # a tighter one
+    (0.9, "off", False),    # null: never
+])
+def test_a_wedge_beyond_its_own_bound_is_flagged(wedged, bound, flagged):
+    raw = raw_record(overlap=wedged)
+    raw["peak_overlap_free"], raw["peak_overlap_wedged"] = 0.02, wedged
+    bounds = dict(BOUNDS) if bound is None else {**BOUNDS, "max_wedge_overlap_ratio": None if bound == "off" else bound}
+    m = case_metrics(raw, RULES, bounds, SETTINGS)
+    assert m["wedged"] and m["flagged"] is flagged
+    assert ("at spheres the blade presses" in m["flag_reason"]) is flagged, m["flag_reason"]
+
+
 def test_a_raw_record_from_before_the_split_counts_its_whole_peak_as_free():
     m = case_metrics(raw_record(overlap=0.09), RULES, BOUNDS, SETTINGS)
     assert m["flagged"] and m["peak_overlap_free"] == 0.09 and math.isnan(m["peak_overlap_wedged"]) and not m["wedged"]

@@ -7,7 +7,7 @@ import pytest
 from conftest import case_params, run_many, run_scene, with_preset
 
 from spreadmap.launcher import retry_wanted
-from spreadmap.metrics import PHASES, case_metrics
+from spreadmap.metrics import MAX_WEDGE_OVERLAP, PHASES, case_metrics
 from spreadmap.scene import DENSEST_PACKING, UnsafeTimeStep, rayleigh_time_step, scene_parameters
 
 pytestmark = pytest.mark.yade
@@ -127,14 +127,28 @@ def test_spheres_pinned_under_the_blade_are_told_from_an_unstable_step(config, t
     - one of the study's cases (default preset, h/d 1.57): a chain of two spheres, the blade on
       one, that one on a second in a pocket of the substrate, pressed to 9.5 % R while the blade
       was pushed up. The one-contact rule of before put it down as free and flagged the case; the
-      two-contact rule reads its free peak as ~2 % R, what the fall into the pile gives."""
-    points = [("smoke", {"f": 0.3, "d_um": 45.0, "h_um": 65.0, "v_mm_s": 10.0}, 2),
+      two-contact rule reads its free peak as ~2 % R, what the fall into the pile gives.
+    A third, the smoke case at 0.95 x the critical step, is the bad step the wedge must not hide:
+    flagged for its overlap at the spheres the blade presses (beyond stability.max_wedge_overlap_ratio)
+    and elsewhere. (At this point the blade-pressed peak reads 3.5-10.6 % R at 0.35-0.88 x critical;
+    0.92 and 0.95 blow up, the whole bed, not the blade's neighbourhood first: docs/guide/01-model.md.)"""
+    wedge_point = {"f": 0.3, "d_um": 45.0, "h_um": 65.0, "v_mm_s": 10.0}
+    points = [("smoke", wedge_point, 2),
               ("default", {"f": 0.3529, "d_um": 47.182, "h_um": 73.854, "v_mm_s": 13.7251}, 1)]
     jobs = []
     for preset, point, seed in points:
         (tmp_path / preset).mkdir()
         jobs.append((case_params(config, point, preset, seed=seed), tmp_path / preset))
-    for (preset, _, _), (params, _), (result, raw) in zip(points, jobs, run_many(jobs)):
+    (tmp_path / "too_large_step").mkdir()  # third: runs on the smoke case's core while the default case runs
+    jobs.append((case_params(with_preset(config, "too_large_step", dt_factor=0.95), wedge_point, "too_large_step", seed=2),
+                 tmp_path / "too_large_step"))
+    results = run_many(jobs)
+    result, raw = results[2]
+    m = case_metrics(raw, config["regime"], config["stability"], config["metrics"])
+    assert raw["peak_overlap_wedged"] > MAX_WEDGE_OVERLAP and raw["peak_overlap_free"] > config["stability"]["max_overlap_ratio"]
+    reason = m["flag_reason"]
+    assert m["flagged"] and "at spheres the blade presses" in reason and "R > 0.05 R" in reason, reason
+    for (preset, _, _), (params, _), (result, raw) in zip(points, jobs, results[:2]):
         assert result["outcome"] == "ok", (preset, result)
         assert raw["params"] == params  # what tools/reattribute_wedges.py re-renders a case from
         assert raw["peak_overlap_ratio"] == max(raw["peak_overlap_free"], raw["peak_overlap_wedged"])

@@ -7,7 +7,7 @@ noise   the case's own noise estimate (counting statistics; batch means within t
 regime  the regime rule (scalars or arrays: DEM cases and surrogate predictions alike)
 case    case_metrics: all of it plus the diagnostics and the stability flags
 """
-from .case import MIN_HEAP_H2, NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure
+from .case import MAX_WEDGE_OVERLAP, MIN_HEAP_H2, NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure
 from .flow import (
     heap_h2,
     heap_volume,
@@ -23,7 +23,7 @@ from .layer import layer_quality, upper_envelope
 from .noise import batch_means_sd, counting_constant, counting_sd, flow_trend, pooled_constant
 from .regime import REGIMES, RULE_KEYS, classify, regime_probabilities
 
-__all__ = ["MIN_HEAP_H2", "NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "batch_means_sd",
+__all__ = ["MAX_WEDGE_OVERLAP", "MIN_HEAP_H2", "NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "batch_means_sd",
            "case_metrics", "classify", "counting_constant", "counting_sd", "flow_trend", "heap_h2", "heap_volume",
            "layer_density", "layer_quality", "mass_flow_ratio", "measure", "measured_span", "passed_volume",
            "pooled_constant", "powder", "regime_probabilities", "sphere_volume", "upper_envelope",

@@ -28,6 +28,11 @@ SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batch
 # sound shipped cases end their window with 0.97 h^2 or more ahead of the blade (98 main-job
 # cases, h/d 1.1-7.1), piles that ran down with ~0.2-0.5 h^2 (estimated)
 MIN_HEAP_H2 = 0.7
+# stability.max_wedge_overlap_ratio's default (the schema's): a sphere the moving blade presses
+# (the wedge, peak_overlap_wedged) is not a time-step matter and is not held to max_overlap_ratio,
+# but no wedge of a sound step goes this deep: the largest of ~1,400 published cases is 0.174 R
+# (docs/study/cases_converge.csv), a step too large near the blade goes further (tests/test_stability_yade.py)
+MAX_WEDGE_OVERLAP = 0.25
 
 
 def _powder_snapshot(snapshot: dict) -> dict:
@@ -157,6 +162,10 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         flags.append(f"time step {out['time_step_ratio']:.2f} x critical")
     if new["peak_overlap_free"] > stability["max_overlap_ratio"]:
         flags.append(f"peak overlap {new['peak_overlap_free']:.3g} R > {stability['max_overlap_ratio']} R")
+    wedge_max = stability.get("max_wedge_overlap_ratio", MAX_WEDGE_OVERLAP)
+    if wedge_max is not None and new["peak_overlap_wedged"] > wedge_max:  # nan (no split) compares False
+        flags.append(f"peak overlap {new['peak_overlap_wedged']:.3g} R at spheres the blade presses > {wedge_max} R: "
+                     f"beyond any wedge of a sound step")
     z_max = stability.get("max_flow_decline_z", 3.0)
     heap_min = stability.get("min_heap_h2", MIN_HEAP_H2)
     if z_max is not None and new["flow_trend_z"] < -z_max:  # nan (no series) compares False
