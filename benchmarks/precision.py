@@ -123,6 +123,10 @@ ARMS = {
                  "points": [*FLOOR_POINTS, "narrow_gap_large"]},
     "flat_full": {"rev": None, "overrides": {"scene": {"substrate": {"kind": "flat"}, "fed_heap": False}},
                   "points": [*FLOOR_POINTS, "narrow_gap_large"]},
+    # the bed's width (periodic across), the knob the fidelity study never ran at 16 d: the shipped
+    # 10 d against 5 d and 16 d at the default preset (issue 32)
+    "width_5": {"rev": None, "overrides": {"presets": {"default": {"width_d": 5}}}, "points": ["normal", "narrow_gap_large"]},
+    "width_16": {"rev": None, "overrides": {"presets": {"default": {"width_d": 16}}}, "points": ["normal", "narrow_gap_large"]},
     "reserve_1h": {"rev": None, "overrides": {"scene": {"pile_reserve": 2.33}}, "points": ["fine_thick_corner"]},
     "reserve_2h": {"rev": None, "overrides": {"scene": {"pile_reserve": 4.67}}, "points": ["fine_thick_corner"]},
 }
