@@ -1,4 +1,4 @@
-"""The loop's replay (spreadmap.convergence.replay): the real step code against a truth fitted on the
+"""The loop's replay (spreadmap.experiments.replay): the real step code against a truth fitted on the
 published cases, with their noise law and the planned-cost law; prints and writes what the stop rule
 is worth, per design.
 
@@ -27,9 +27,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from spreadmap.config import load  # noqa: E402
-from spreadmap.convergence import replay  # noqa: E402
-from spreadmap.convergence.cost import fit_law  # noqa: E402
+from spreadmap.experiments import replay  # noqa: E402
 from spreadmap.files import atomic_path, write_text_atomically  # noqa: E402
+from spreadmap.loop.cost import fit_law  # noqa: E402
 from spreadmap.noise_law.apply import case_noise  # noqa: E402
 
 PUBLISHED = ["cases_converge.csv", "cases_lds.csv", "cases_lattice.csv", "cases_heldout.csv", "cases_heldout2.csv"]
@@ -174,7 +174,7 @@ def main(argv=None) -> int:
             frame.to_csv(tmp, index=False)
     with pd.option_context("display.width", 220, "display.max_columns", 20, "display.max_rows", 200):
         print(hon.round(3).to_string(index=False))
-    from spreadmap.convergence.replay_plots import plot_replay
+    from spreadmap.experiments.replay_plots import plot_replay
 
     plot_replay(paths, hon, a.out / "replay")
     write_text_atomically(a.out / "summary.md", summary_markdown(paths, hon, margin, law))

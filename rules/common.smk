@@ -11,7 +11,7 @@ import sys
 from spreadmap import config as spreadmap_config
 from spreadmap.cases import CASE_ID_PATTERN, case_scene, rounded
 from spreadmap.design import NAMES
-from spreadmap.fidelity_plan import knob_cases, knob_presets, preset_cases
+from spreadmap.fidelity.plan import knob_cases, knob_presets, preset_cases
 from spreadmap.sampling import chosen_points
 from spreadmap.render import template_sha256
 from spreadmap.migrate_cases import legacy_case_folders
@@ -102,7 +102,7 @@ for _i, _p in enumerate(_points):
              preset=_p["preset"] or (config.get("points") or {}).get("preset"), seed=_p["seed"])
 
 # The fidelity study (`snakemake fidelity`): its own two sets, outside the main job. A knob value
-# is a preset of its own (spreadmap.fidelity_plan), added to the presets here.
+# is a preset of its own (spreadmap.fidelity.plan), added to the presets here.
 FIDELITY_SETS = ("fidelity", "knobs")
 FIDELITY = config.get("fidelity") or {}
 KNOBS = FIDELITY.get("knobs") or {}

@@ -1,15 +1,15 @@
 """Snakemake entry (checkpoint): after n cases of `snakemake converge`, stop (map criteria met, or
-the case / CPU budget spent) or choose the next batch. The logic is spreadmap.convergence.stepper;
+the case / CPU budget spent) or choose the next batch. The logic is spreadmap.loop.stepper;
 the model is the map's model (the `surrogate:` config), the cost of a case the scene's plan."""
 import json
 
 import pandas as pd
 
-from spreadmap.convergence.cost import PlannedCost
-from spreadmap.convergence.model import make_map_fit
-from spreadmap.convergence.stepper import step
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
+from spreadmap.loop.cost import PlannedCost
+from spreadmap.loop.model import make_map_fit
+from spreadmap.loop.stepper import step
 from spreadmap.noise_law.apply import case_noise
 from spreadmap.records import read_json_object, read_metrics
 

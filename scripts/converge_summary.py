@@ -1,9 +1,9 @@
 """Snakemake entry: where `snakemake converge` stopped and why, with the path it took."""
 import json
 
-from spreadmap.convergence.plots import plot_converge_path
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
+from spreadmap.loop.plots import plot_converge_path
 
 log_to(snakemake)  # noqa: F821
 

@@ -4,8 +4,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from spreadmap import fidelity_plots as plots
-from spreadmap import fidelity_study as study
+from spreadmap.fidelity import plots, study
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.records import read_table

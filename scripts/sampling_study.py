@@ -1,6 +1,6 @@
 """Snakemake entry: the DEM-free sampling-design study (LDS vs lattice vs random)."""
-from spreadmap.convergence import sampling_study
-from spreadmap.convergence.plots import plot_sampling_study
+from spreadmap.experiments import sampling_study
+from spreadmap.experiments.plots import plot_sampling_study
 from spreadmap.logs import log_to
 from spreadmap.surrogate import load_model
 

@@ -3,4 +3,36 @@
 Everything computed outside YADE lives here (scene derivation, metrics, sampling, convergence,
 surrogate, maps) so that it can be unit-tested without a DEM run.  Nothing in this package is
 imported by the scripts that run inside YADE (yade_scripts/), which use Debian's own Python.
+
+Rooms (sub-packages), one job each:
+
+* ``loop`` -- the main job's adaptive loop (``snakemake converge``, rules/converge.smk): its stop
+  rule about the map, the map's model, where the next batch goes, what a case costs, one step.
+* ``study_rule`` -- the published study's convergence rule (rules/study_rule.smk), as it ran.
+* ``experiments`` -- experiments without DEM: the loop's replay and the sampling studies.
+* ``fidelity`` -- the fidelity study: the cases it plans, its numbers, its figures.
+* ``surrogate`` -- the noise-aware surrogate, its validation, the saved model and prediction.
+* ``maps`` -- the design maps drawn from the surrogate; ``decisions`` -- from the maps to the
+  settings to run a powder at; ``sensitivity`` -- the parameters ranked by influence.
+* ``metrics`` -- one case's raw YADE output reduced to its row of the results table.
+* ``noise_law`` -- the noise law fitted to seed repeats and applied to a results table.
+
+Where each concept is held (one module each):
+
+* design space, the unit cube: ``design`` (NAMES, PARAMETERS, TARGETS; to_unit / to_physical)
+* results table, usable cases: ``table`` (build_table; usable = finished and not flagged)
+* partitions (the LDS prefix ``index < n``): ``surrogate.training_rows.partition``; the study
+  rule's statistics per partition: ``study_rule.rule``
+* atomic writing: ``files`` (write_text_atomically, atomic_path); reading the workflow's files
+  without taking a damaged one for data: ``records``
+* config loading and defaults: ``config`` (load: schemas/config.schema.yaml's defaults filled,
+  then the cross-key checks)
+* noise model: ``noise_law`` (config ``noise_model``: ``fit``, ``apply``); a case's own estimate:
+  ``metrics.noise``; a new run's SD at a point: ``surrogate.noise``
+* the loop: ``loop.stepper`` (one step; its criteria ``loop.map_criteria``)
+* the study rule: ``study_rule.rule``
+* the experiments: ``experiments`` (``replay``, ``sampling_study``, ``noisy_study``, ``cost_study``)
+* fidelity: ``fidelity`` (``plan``, ``study``, ``plots``)
+* surrogate: ``surrogate`` (``fitting``, ``prediction``); maps: ``maps``; decisions:
+  ``decisions``; metrics: ``metrics`` (``case.case_metrics``); sensitivity: ``sensitivity``
 """

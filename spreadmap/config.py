@@ -135,7 +135,7 @@ def _check_cross_keys(config: dict) -> None:
 
     for problem in decision_problems(config):
         raise ConfigError(problem)
-    from .fidelity_plan import check as check_fidelity
+    from .fidelity.plan import check as check_fidelity
 
     for problem in check_fidelity(config):
         raise ConfigError(problem)

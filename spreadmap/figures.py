@@ -14,6 +14,8 @@ import pandas as pd  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
+N_LABEL = "number of cases N [-]"  # the x axis of every figure against the number of cases
+
 
 def new_figure(width: float, height: float) -> Figure:
     """A constrained-layout figure on its own Agg canvas: no pyplot state, safe in parallel jobs."""

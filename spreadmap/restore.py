@@ -32,8 +32,8 @@ import pandas as pd
 
 from .cases import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, readable_id
 from .checksums import sha256, verified_bytes
-from .convergence.stepper import step_number
 from .files import write_text_atomically
+from .loop.stepper import step_number
 from .records import CorruptFileError, read_metrics
 
 # Columns of a results table that are the table's labels of a case, not the case's metrics.

@@ -94,7 +94,7 @@ def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.D
 
 def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame], scene_sha256: str | None = None) -> dict[str, float]:
     """Per sweep: the predicted CPU hours of its planned cases not yet finished, from the planned-cost
-    law (spreadmap.convergence.cost) calibrated to the finished cases' measured CPU (this machine's
+    law (spreadmap.loop.cost) calibrated to the finished cases' measured CPU (this machine's
     speed); a case shared by two sweeps counts in each."""
     nonempty = [t for t in tables.values() if len(t)]
     finished = pd.concat(nonempty, ignore_index=True) if nonempty else pd.DataFrame()
@@ -105,7 +105,7 @@ def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame], scene_sha256:
     for case in planned_cases(config, scene_sha256=scene_sha256):
         if case.sweep in todo and case.case_id not in done and readable_part(case.case_id) not in legacy:
             todo[case.sweep][case.case_id] = case.point
-    from spreadmap.convergence.cost import PlannedCost  # here: the workflow's registry imports this module
+    from spreadmap.loop.cost import PlannedCost  # here: the workflow's registry imports this module
 
     cost = PlannedCost.from_config(config)
     if "case_id" in finished:

@@ -19,8 +19,8 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
-from spreadmap.convergence.stepper import step_number
 from spreadmap.design import NAMES, bounds
+from spreadmap.loop.stepper import step_number
 from spreadmap.substrate import floor_label
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
@@ -111,7 +111,7 @@ def _study_rule(study: Path) -> list[str]:
     the LDS partitions of config.yaml whose every case has run, the lattices whose every case has
     run; the largest relative change of the five statistics of MFR and PD from the partition
     before."""
-    from spreadmap.convergence.study_rule import convergence_table, first_converged
+    from spreadmap.study_rule.rule import convergence_table, first_converged
 
     cfg = _read_yaml(study / "config.yaml")
     conv = cfg.get("convergence") or {}
@@ -149,8 +149,8 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
     """The sampling comparison at matched size, as far as the sweeps have run: each complete
     lattice k^4 and the LDS's first k^4 cases, both against the largest complete LDS partition
     (`complete`: the LDS partitions whose every case has run; the largest sample), by the study's
-    change measure (spreadmap.convergence.study_rule.difference_from)."""
-    from spreadmap.convergence.study_rule import difference_from
+    change measure (spreadmap.study_rule.rule.difference_from)."""
+    from spreadmap.study_rule.rule import difference_from
 
     if not complete or lattice is None or not len(lattice) or "k" not in lattice:
         return []

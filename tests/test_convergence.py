@@ -1,4 +1,4 @@
-"""Tests of spreadmap.convergence: statistics, the near-zero rule, the detectors, the stop rule."""
+"""Tests of spreadmap.study_rule and spreadmap.loop: statistics, the near-zero rule, the detectors, the stop rule."""
 import copy
 import json
 
@@ -8,11 +8,11 @@ import pytest
 from figure_text import pdf_text
 from scipy import stats
 
-from spreadmap import convergence as cv
-from spreadmap.convergence import active, stepper
-from spreadmap.convergence import map_criteria as mc
-from spreadmap.convergence import model as mm
+from spreadmap import study_rule as cv
 from spreadmap.design import NAMES, to_physical, to_unit
+from spreadmap.loop import active, stepper
+from spreadmap.loop import map_criteria as mc
+from spreadmap.loop import model as mm
 from spreadmap.sampling import halton, halton_unit
 from spreadmap.substrate import floor_label
 
@@ -52,10 +52,10 @@ def test_partition_statistics_equal_numpy_and_scipy():
 
 def _changes(prev, curr, floors=None):
     """The rule as convergence_table applies it, one statistic at a time."""
-    fl = cv.study_rule._floors(floors)
+    fl = cv.rule._floors(floors)
     out = {}
     for s in cv.STATISTICS:
-        c, d, b = cv.study_rule._change_arrays(prev[s], curr[s], fl[s])
+        c, d, b = cv.rule._change_arrays(prev[s], curr[s], fl[s])
         out[s] = {"change": float(c), "denominator": float(d), "basis": str(b)}
     return out
 
@@ -317,7 +317,7 @@ def _sweeps():
 
 
 def test_plots_write_png_pdf_csv(tmp_path):
-    from spreadmap.convergence import plots as cp
+    from spreadmap.study_rule import plots as cp
     lds, lat = _sweeps()
     long_df = pd.concat([cp.partition_values(lds, "lds", partitions=[50, 100, 200, 400]),
                          cp.partition_values(lat, "lattice", partition_col="k")],
@@ -348,7 +348,7 @@ def test_plots_write_png_pdf_csv(tmp_path):
 def test_statistic_panels_are_scaled_to_the_partitions_not_the_first_few_cases():
     """A case-by-case curve's first cases swing widely; the y range covers the partitions, the bands
     and the case-by-case values from the smallest partition on, and nothing before it."""
-    from spreadmap.convergence import plots as cp
+    from spreadmap.study_rule import plots as cp
     panel = pd.DataFrame({"n": [2, 3, 16, 50, 16, 81], "value": [5.0, -4.0, 0.44, 0.45, 0.43, 0.46],
                           "band_low": 0.447, "band_high": 0.453})
     low, high = cp.statistic_limits(panel, n_from=16, pad=0.1)
@@ -780,7 +780,7 @@ def test_cost_law_is_recovered_from_tables_of_machines_of_different_speeds(confi
     here from scene_parameters), on three 'machines' 1x, 1.6x and 0.7x as fast, log-normal
     scatter SD 0.1; fit_law gets the exponents within 0.05 and ln_a as the median machine's;
     failed cases and presets the config does not know are not learned from."""
-    from spreadmap.convergence.cost import PlannedCost, fit_law
+    from spreadmap.loop.cost import PlannedCost, fit_law
     from spreadmap.scene import scene_parameters
 
     rng = np.random.default_rng(4)
@@ -914,7 +914,7 @@ def test_replay_runs_the_loop_against_a_known_truth(config):
     """A replay on the smooth truth (noise 0.008): its rows follow the steps, the cases it ran are
     the truth plus noise of the stated SD, and its true error is the map's against the truth,
     recomputed here with a model fitted on the same cases."""
-    from spreadmap.convergence import replay
+    from spreadmap.experiments import replay
 
     cfg = copy.deepcopy(config)
     cfg["converge"].update({**FAST, "start": 16, "batch": 8, "map_error": {"tolerance": {"mfr": 0.01, "pd": 0.01},
@@ -946,7 +946,7 @@ def test_replay_stops_and_honesty_on_a_constructed_path():
     the beta quantiles)."""
     from scipy.stats import beta
 
-    from spreadmap.convergence import replay
+    from spreadmap.experiments import replay
 
     rows = []
     for seed in range(10):

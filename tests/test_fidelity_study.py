@@ -1,5 +1,5 @@
-"""Tests of the fidelity study without YADE: which cases it plans (spreadmap.fidelity_plan) and
-the errors, noise, costs and figures it reports (spreadmap.fidelity_study, fidelity_plots)."""
+"""Tests of the fidelity study without YADE: which cases it plans (spreadmap.fidelity.plan) and
+the errors, noise, costs and figures it reports (spreadmap.fidelity.study, fidelity.plots)."""
 import copy
 import math
 
@@ -9,9 +9,7 @@ import pytest
 from scipy import stats
 
 from spreadmap import config as spreadmap_config
-from spreadmap import fidelity_plan as plan
-from spreadmap import fidelity_plots as plots
-from spreadmap import fidelity_study as study
+from spreadmap.fidelity import plan, plots, study
 from spreadmap.scene import scene_parameters
 
 

@@ -10,9 +10,8 @@ import pytest
 from conftest import ROOT
 
 from spreadmap import config as spreadmap_config
-from spreadmap import fidelity_plan as plan
-from spreadmap import fidelity_study as study
 from spreadmap.cases import readable_id
+from spreadmap.fidelity import plan, study
 
 STUDIES = [d for d in (ROOT / "docs" / "fidelity", ROOT / "docs" / "fidelity_flat") if (d / "config.yaml").exists()]
 

@@ -92,8 +92,8 @@ def test_cpu_to_go_is_the_plans_cost_at_this_machines_speed(config):
     CPU to go is the law's sum over the other 33 (computed here from the scene's planned spheres
     and steps and the law's formula) times the factor, within the scatter's median error; with
     no case finished, the law uncalibrated."""
-    from spreadmap.convergence.cost import DEFAULT_LAW
     from spreadmap.design import NAMES
+    from spreadmap.loop.cost import DEFAULT_LAW
     from spreadmap.scene import scene_parameters
 
     cfg = copy.deepcopy(config)

@@ -26,9 +26,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import pandas as pd  # noqa: E402
 
 from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.convergence.cost import PlannedCost  # noqa: E402
-from spreadmap.convergence.model import make_map_fit  # noqa: E402
-from spreadmap.convergence.stepper import step, step_number  # noqa: E402
+from spreadmap.loop.cost import PlannedCost  # noqa: E402
+from spreadmap.loop.model import make_map_fit  # noqa: E402
+from spreadmap.loop.stepper import step, step_number  # noqa: E402
 from spreadmap.noise_law.apply import case_noise, check_sections  # noqa: E402
 
 

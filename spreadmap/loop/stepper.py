@@ -40,10 +40,10 @@ import pandas as pd
 from ..cases import rounded
 from ..design import NAMES
 from ..sampling import halton
+from ..study_rule.rule import batches_until_converged
 from ..table import usable
 from . import active, map_criteria
 from .model import FitFunction, make_map_fit
-from .study_rule import batches_until_converged
 
 STEP_DEFAULTS: dict[str, Any] = {
     "start": 32, "batch": 16, "budget": 512, "cpu_budget_h": None, "sampling": "active",

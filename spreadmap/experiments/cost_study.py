@@ -13,7 +13,7 @@ Reported (``summarise``): per design and map-RMSE target, the CPU hours each see
 the target (the CPU of the first checkpoint at or below it; censored at the budget), their median
 and range over seeds, and per seed the ratio of ``active``'s CPU to ``active_per_cpu``'s.
 
-    python -m spreadmap.convergence.cost_study --out docs/sampling --seeds 8 --n-max 256
+    python -m spreadmap.experiments.cost_study --out docs/sampling --seeds 8 --n-max 256
 """
 from __future__ import annotations
 
@@ -86,7 +86,7 @@ def main(argv=None) -> None:
     summary.to_csv(out / "cost_study_summary.csv", index=False)
     from .plots import plot_cost_study
     plot_cost_study(table, args.targets, out / "cost_study")
-    meta = {"command": "python -m spreadmap.convergence.cost_study " + " ".join(argv or []),
+    meta = {"command": "python -m spreadmap.experiments.cost_study " + " ".join(argv or []),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0, "seeds": args.seeds,
             "n_max": args.n_max, "targets": args.targets}
     (out / "cost_study_run.json").write_text(json.dumps(meta, indent=1))

@@ -21,8 +21,8 @@ import numpy as np
 import pandas as pd
 from scipy.stats import chi2 as chi2_dist
 
-from .design import TARGETS
-from .table import flagged, usable
+from ..design import TARGETS
+from ..table import flagged, usable
 
 RESOLVED_SIGMAS = 2.0  # an error beyond this many standard errors is resolved
 
@@ -248,7 +248,7 @@ def markdown_summary(presets: pd.DataFrame, per_point: pd.DataFrame, knobs: pd.D
 
 def machine_description(table: pd.DataFrame) -> dict:
     """Where and when the numbers were measured, with the YADE versions of the cases."""
-    from .machine import description
+    from ..machine import description
 
     versions = sorted(set(table.get("yade_version", pd.Series(dtype=str)).dropna().astype(str)))
     return {**description(), "yade": versions}

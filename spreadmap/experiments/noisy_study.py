@@ -28,7 +28,7 @@ model's mean against the known truth, over the map grids, falls to a target.
   powder plane), also reported on the box alone.  ``n_needed``: the first checkpoint at which
   the map RMSE is at or below the target; censored (NaN) when not reached within the budget.
 
-The full study is run once (``python -m spreadmap.convergence.noisy_study --out docs/sampling``);
+The full study is run once (``python -m spreadmap.experiments.noisy_study --out docs/sampling``);
 tests and the workflow run a small version.
 """
 from __future__ import annotations
@@ -43,10 +43,10 @@ import numpy as np
 import pandas as pd
 
 from ..design import NAMES, to_physical, to_unit
+from ..loop import active
+from ..loop.map_criteria import map_grids
+from ..loop.model import make_map_fit
 from ..sampling import halton_unit, lattice_unit
-from . import active
-from .map_criteria import map_grids
-from .model import make_map_fit
 from .sampling_study import flow_curve
 
 MEAN, SD = 0.29, 0.085
@@ -266,10 +266,11 @@ def main(argv=None) -> None:
     needed = pd.concat([cases_needed(table, t) for t in args.targets], ignore_index=True)
     summ = summarise(needed)
     summ.to_csv(out / "noisy_study_summary.csv", index=False)
-    rmse_summary(table).to_csv(out / "noisy_study_rmse.csv", index=False)
+    rs = rmse_summary(table)
+    rs.to_csv(out / "noisy_study_rmse.csv", index=False)
     from .plots import plot_noisy_study
-    plot_noisy_study(table, summ, out / "noisy_study")
-    meta = {"command": "python -m spreadmap.convergence.noisy_study " + " ".join(argv or []),
+    plot_noisy_study(table, summ, rs, out / "noisy_study")
+    meta = {"command": "python -m spreadmap.experiments.noisy_study " + " ".join(argv or []),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0,
             "seeds": args.seeds, "n_max": args.n_max, "targets": args.targets}
     (out / "noisy_study_run.json").write_text(json.dumps(meta, indent=1))

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .design import TARGETS
-from .figures import new_figure, save_figure
+from ..design import TARGETS
+from ..figures import new_figure, save_figure
 
 TARGET_STYLE = {"mfr": ("MFR", "o", "tab:blue"), "pd": ("PD", "s", "tab:orange")}
 KNOB_LABELS = {"width_d": "bed width [d]", "heap_height_d": "heap height [d]",

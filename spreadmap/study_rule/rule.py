@@ -1,7 +1,7 @@
 """The study's rule: partition statistics of MFR and PD and the relative-change criterion.
 
 Kept exactly as the reference study ran it (it is the study's row of every convergence report);
-the workflow's own stopping rule is about the map (``spreadmap.convergence.map_criteria``).
+the workflow's own stopping rule is about the map (``spreadmap.loop.map_criteria``).
 
 The criterion (SPEC, "Sampling and convergence")
 ------------------------------------------------

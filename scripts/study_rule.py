@@ -4,11 +4,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from spreadmap import convergence as cv
-from spreadmap.convergence import plots
+from spreadmap import study_rule as cv
 from spreadmap.design import TARGETS
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
+from spreadmap.study_rule import plots
 from spreadmap.table import usable
 
 log_to(snakemake)  # noqa: F821

@@ -5,7 +5,7 @@ cases against about 10,000 for a uniform lattice.  This module *tests* that kind
 cheap functions instead of assuming it: on smooth test functions of the unit cube [0, 1]^4, or on
 any predictor ``predict(points[n, 4] in physical units) -> ndarray[n, 2]`` (e.g. a surrogate
 trained on real DEM results), it counts the cases each design needs before the criterion of
-``spreadmap.convergence`` (five statistics of each output, relative change < tolerance, floor 1
+``spreadmap.study_rule`` (five statistics of each output, relative change < tolerance, floor 1
 for skewness and kurtosis) holds for good.
 
 Designs (``method``)
@@ -24,7 +24,7 @@ Schedules (``schedule``): where the criterion is checked
   lattice these are different lattices; for LDS and random, prefixes of one sequence.
 
 ``n_converged`` is the first N from which the criterion holds at every later check up to the
-budget (``convergence.first_stable_n``), NaN if that does not happen within the budget
+budget (``rule.first_stable_n``), NaN if that does not happen within the budget
 (censored).  ``n_first_holds`` is the first N at which it held at all.
 
 Caveats, measured or structural
@@ -69,7 +69,7 @@ import pandas as pd
 from ..design import NAMES, to_physical
 from ..sampling import halton_unit as lds_points  # the workflow's own LDS and lattice points
 from ..sampling import lattice_unit as lattice_points
-from . import study_rule as cv
+from ..study_rule import rule as cv
 
 D = len(NAMES)
 
@@ -196,7 +196,7 @@ def run_study(functions: Mapping[str, Callable[[np.ndarray], np.ndarray]] | None
     ``seeds``: a count (0 .. seeds-1) or the seeds themselves.  Lattices run k = 2 .. k_max;
     LDS and random run ``n_max`` cases (default k_max^4, the same budget as the lattice).
     ``start``: the first N checked case by case.  ``window``: the minimum number of holding
-    checks in the final run (see ``convergence.first_stable_n``).
+    checks in the final run (see ``rule.first_stable_n``).
 
     Returns a tidy frame: function, method, schedule, seed (Int64, NA for the lattice),
     n_converged (float, NaN = not converged within the budget), n_first_holds, budget.

@@ -35,12 +35,12 @@ import numpy as np
 import pandas as pd
 
 from ..design import NAMES
+from ..loop import map_criteria
+from ..loop.cost import PlannedCost
+from ..loop.model import make_map_fit
+from ..loop.stepper import step
 from ..sampling import halton
 from ..scene import precision_target
-from . import map_criteria
-from .cost import PlannedCost
-from .model import make_map_fit
-from .stepper import step
 
 TARGETS = ("mfr", "pd")
 

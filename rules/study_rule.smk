@@ -22,7 +22,7 @@ rule convergence:
     conda:
         "../envs/analysis.yaml"
     script:
-        "../scripts/convergence.py"
+        "../scripts/study_rule.py"
 
 
 rule sampling_study:

@@ -66,8 +66,8 @@ from scipy import stats
 from sklearn.model_selection import KFold
 
 from ..design import NAMES, bounds
+from ..study_rule.rule import DEFAULT_FLOORS, STATISTICS
 from .model import FitFunction, MapModel, table_data, usable_rows
-from .study_rule import DEFAULT_FLOORS, STATISTICS
 
 CRITERIA: tuple[str, ...] = ("map_error", "cv_rmse", "map_change", "ci")
 MIN_CASES = 5  # usable cases a target needs before its model is fitted and the criteria evaluated

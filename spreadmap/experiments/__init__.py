@@ -1,0 +1,8 @@
+"""Experiments without DEM: the loop's code and the study's rule against known truths.
+
+* ``replay`` -- the loop's step code against a known truth with the measured noise and cost
+  (``replay_plots``: its figure).
+* ``sampling_study`` -- the study's rule on noise-free test functions; ``noisy_study`` -- the
+  older sampling-design study with noise; ``cost_study`` -- the map per CPU hour.
+* ``plots`` -- the figures of the three sampling studies.
+"""

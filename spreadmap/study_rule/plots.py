@@ -1,0 +1,191 @@
+"""Figures of the study's rule: the distributions per partition and the statistics against N.
+
+Every figure is written as PNG and PDF with the numbers behind it as CSV beside it
+(``save_figure``).  Figures are built on ``matplotlib.figure.Figure`` objects rendered by the Agg
+canvas: no pyplot, no global state, safe in parallel workflow jobs.  Functions take DataFrames and
+an output path stem (``results/convergence/statistics`` -> ``statistics.png``, ``.pdf``,
+``.csv``) and return the paths written.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.ticker import NullFormatter
+
+from ..figures import N_LABEL, new_figure, save_figure
+from ..table import usable
+from . import rule as cv
+
+TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
+STAT_LABELS = {
+    "mean": "mean [-]",
+    "std": "standard deviation (ddof=1) [-]",
+    "median": "median [-]",
+    "kurtosis": "excess kurtosis (Fisher) [-]",
+    "skewness": "skewness [-]",
+}
+
+
+def _label(target: str) -> str:
+    return TARGET_LABELS.get(target, f"{target} [-]")
+
+
+# ----------------------------------------------------------------------------------------------
+# (1) distributions per partition
+# ----------------------------------------------------------------------------------------------
+def partition_values(table: pd.DataFrame, sweep: str, targets: Sequence[str] = cv.DEFAULT_TARGETS,
+                     partitions: Iterable[int] | None = None, order_col: str = "index",
+                     partition_col: str | None = None) -> pd.DataFrame:
+    """Long frame (sweep, partition, target, value) of the usable target values per partition.
+
+    Partitions as in ``rule.convergence_table``: prefixes of ``order_col`` order
+    (``partitions`` = their sizes) or, with ``partition_col``, one group per value (lattices),
+    labelled by the group size.
+    """
+    parts: list[tuple[int, pd.DataFrame]] = []
+    if partition_col is not None:
+        for _, g in table.groupby(partition_col, sort=False):
+            parts.append((len(g), g.loc[usable(g)]))
+        parts.sort(key=lambda p: p[0])
+    else:
+        ordered = table.sort_values(order_col, kind="stable")
+        keep = usable(ordered)
+        if partitions is None:
+            partitions = sorted({int(n) for n in np.unique(np.geomspace(
+                min(16, len(ordered)), len(ordered), 5).astype(int))})
+        parts = [(int(n), ordered.iloc[:int(n)][keep[:int(n)]]) for n in partitions]
+    frames = []
+    for n, g in parts:
+        for t in targets:
+            v = g[t].to_numpy(dtype=float)
+            v = v[np.isfinite(v)]
+            frames.append(pd.DataFrame({"sweep": sweep, "partition": n, "target": t, "value": v}))
+    return pd.concat(frames, ignore_index=True)
+
+
+def plot_distributions(long_df: pd.DataFrame, path_stem,
+                       targets: Sequence[str] = cv.DEFAULT_TARGETS, floor: str | None = None) -> dict[str, Path]:
+    """Box plots of each target per partition, one column per sweep (e.g. LDS | lattice).
+
+    ``long_df``: columns sweep, partition, target, value (``partition_values`` of each sweep,
+    concatenated).  Boxes: quartiles, whiskers 1.5 IQR, the mean as a triangle.  Rows share
+    the y axis so the sweeps compare directly.
+    """
+    sweeps = list(dict.fromkeys(long_df["sweep"]))
+    fig = new_figure(4.2 * len(sweeps), 3.0 * len(targets))
+    axes = fig.subplots(len(targets), len(sweeps), squeeze=False, sharey="row")
+    for i, t in enumerate(targets):
+        for j, s in enumerate(sweeps):
+            ax = axes[i, j]
+            sub = long_df[(long_df["sweep"] == s) & (long_df["target"] == t)]
+            ns = sorted(sub["partition"].unique())
+            data = [sub.loc[sub["partition"] == n, "value"].to_numpy() for n in ns]
+            if data:
+                ax.boxplot(data, tick_labels=[str(n) for n in ns], showmeans=True)
+            ax.set_title(f"{s}: {t.upper()} per partition")
+            ax.set_xlabel(N_LABEL)
+            ax.set_ylabel(_label(t))
+            ax.tick_params(axis="x", labelrotation=45)
+    return save_figure(fig, path_stem, long_df, floor)
+
+
+# ----------------------------------------------------------------------------------------------
+# (2) statistics against N
+# ----------------------------------------------------------------------------------------------
+def _stats_long(name: str, df: pd.DataFrame, targets, tolerance, floors) -> pd.DataFrame:
+    fl = cv._floors(floors)
+    n = df["partition"].to_numpy() if "partition" in df.columns else df.index.to_numpy()
+    frames = []
+    for t in targets:
+        for s in cv.STATISTICS:
+            col = f"{t}_{s}"
+            if col not in df.columns:
+                continue
+            v = df[col].to_numpy(dtype=float)
+            final = v[np.isfinite(v)][-1] if np.isfinite(v).any() else np.nan
+            half = tolerance * max(abs(final), fl[s]) if np.isfinite(final) else np.nan
+            frames.append(pd.DataFrame({"sweep": name, "n": n, "target": t, "statistic": s,
+                                        "value": v, "final": final, "band_low": final - half,
+                                        "band_high": final + half}))
+    return pd.concat(frames, ignore_index=True)
+
+
+def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
+                    targets: Sequence[str] = cv.DEFAULT_TARGETS,
+                    tolerance: float = cv.DEFAULT_TOLERANCE,
+                    floors: Mapping[str, float] | None = None, floor: str | None = None) -> dict[str, Path]:
+    """Each statistic against N (log x) for every sweep, with the tolerance band of each sweep.
+
+    ``sweeps``: name -> statistics frame, either a ``convergence_table`` (column ``partition``)
+    or a ``running_statistics`` frame (index ``n``).  The band is final value
+    +- tolerance * max(|final|, floor): the set of values within the criterion's reach of where
+    the sweep ended (the floor rule of ``rule`` applies to skewness and kurtosis).
+    With a partition sweep among them, the axes start at its smallest partition: a case-by-case
+    curve's first few cases swing over a range that would flatten the rest (the CSV keeps them).
+    """
+    long_df = pd.concat([_stats_long(k, v, targets, tolerance, floors) for k, v in sweeps.items()],
+                        ignore_index=True)
+    fig = new_figure(4.5 * len(targets), 2.4 * len(cv.STATISTICS))
+    axes = fig.subplots(len(cv.STATISTICS), len(targets), squeeze=False, sharex=True)
+    colors = {name: f"C{i}" for i, name in enumerate(sweeps)}
+    n_from = _scaled_from(sweeps)
+    for j, t in enumerate(targets):
+        for i, s in enumerate(cv.STATISTICS):
+            ax = axes[i, j]
+            for name in sweeps:
+                sub = long_df[(long_df["sweep"] == name) & (long_df["target"] == t)
+                              & (long_df["statistic"] == s)]
+                if sub.empty:
+                    continue
+                c = colors[name]
+                marker = "o" if len(sub) <= 60 else None
+                ax.plot(sub["n"], sub["value"], color=c, marker=marker, ms=3, lw=1, label=name)
+                ax.axhspan(sub["band_low"].iloc[0], sub["band_high"].iloc[0], color=c, alpha=0.15,
+                           label=f"{name} final +- {tolerance:.2%} band")
+            panel = long_df[(long_df["target"] == t) & (long_df["statistic"] == s)]
+            limits = statistic_limits(panel, n_from)
+            if limits is not None:
+                ax.set_ylim(*limits)
+            ax.set_xscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())
+            ax.set_ylabel(f"{t.upper()} {STAT_LABELS[s]}")
+            if i == len(cv.STATISTICS) - 1:
+                ax.set_xlabel(N_LABEL)
+            if i == 0:
+                ax.set_title(f"{t.upper()} statistics against N")
+    if n_from > 1:  # a case-by-case curve's first few cases are left off (they are in the CSV)
+        axes[0, 0].set_xlim(n_from / 1.15, long_df["n"].max() * 1.15)
+        ticks = _partition_sizes(sweeps)
+        axes[0, 0].set_xticks(ticks, [str(n) for n in ticks])  # shared x: every panel's ticks
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside upper center", ncol=min(len(labels), 3), fontsize="small")
+    return save_figure(fig, path_stem, long_df, floor)
+
+
+def _partition_sizes(sweeps: Mapping[str, pd.DataFrame]) -> list[int]:
+    """Every partition size (N) of the partition sweeps among ``sweeps``, sorted."""
+    return sorted({int(n) for v in sweeps.values() if "partition" in v.columns for n in v["partition"]})
+
+
+def _scaled_from(sweeps: Mapping[str, pd.DataFrame]) -> int:
+    """The N from which the y axes are scaled: the smallest partition of any partition sweep (a
+    case-by-case curve's first few cases swing over a range that would flatten everything else)."""
+    sizes = _partition_sizes(sweeps)
+    return sizes[0] if sizes else 1
+
+
+def statistic_limits(panel: pd.DataFrame, n_from: int, pad: float = 0.08) -> tuple[float, float] | None:
+    """y limits of one statistic's panel: every value at N >= n_from and every sweep's band, padded
+    by ``pad`` of their span (None when nothing finite is left)."""
+    values = np.concatenate([panel.loc[panel["n"] >= n_from, "value"].to_numpy(dtype=float),
+                             panel["band_low"].to_numpy(dtype=float), panel["band_high"].to_numpy(dtype=float)])
+    values = values[np.isfinite(values)]
+    if not values.size:
+        return None
+    low, high = values.min(), values.max()
+    span = high - low if high > low else max(abs(high), 1e-12)
+    return low - pad * span, high + pad * span
+
