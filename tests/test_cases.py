@@ -119,6 +119,8 @@ def ran_steel(tmp_path_factory):
     return wf
 
 
+@pytest.mark.yade
+@pytest.mark.slow
 def test_two_materials_sit_side_by_side_and_a_switch_back_runs_nothing(ran_steel, tmp_path):
     wf = tmp_path / "wf"
     shutil.copytree(ran_steel, wf, symlinks=True)
@@ -154,6 +156,8 @@ def _as_legacy(folder):
     return folder.with_name(old)
 
 
+@pytest.mark.yade
+@pytest.mark.slow
 def test_a_legacy_folder_is_migrated_to_its_content_id_and_re_used(ran_steel, tmp_path):
     """Two case folders of a run before content keys (and Snakemake's records of them gone with their
     old paths), one restored folder with no parameters, one case run under another material: the
