@@ -3,7 +3,10 @@
 YADE runs its own system Python: VIRTUAL_ENV, PYTHONPATH and PYTHONHOME are cleared and the venv
 is taken off PATH; one thread (-j1, OMP_NUM_THREADS=1) because two single-threaded cases at once
 beat one case on two threads. An outer timeout kills the whole process group: a blown-up run can
-hang inside YADE, out of reach of the in-run watchdog."""
+hang inside YADE, out of reach of the in-run watchdog. YADE runs in a session of its own (so that
+the timeout can kill its group), which a `kill -9` of the workflow's process group does not reach:
+it is therefore started under `setpriv --pdeathsig KILL` and dies with the launcher that started it,
+instead of running on, orphaned, beside the resumed workflow's run of the same case."""
 from __future__ import annotations
 
 import json
@@ -34,6 +37,14 @@ def yade_executable() -> str:
     return exe
 
 
+def die_with_parent() -> list[str]:
+    """The prefix that makes YADE get SIGKILL when the process that started it dies (util-linux's
+    setpriv, in every Debian: prctl PR_SET_PDEATHSIG, kept across its exec of yade); none where
+    setpriv is missing."""
+    setpriv = shutil.which("setpriv", path=clean_environment()["PATH"] + os.pathsep + "/usr/bin:/bin")
+    return [setpriv, "--pdeathsig", "KILL", "--"] if setpriv else []
+
+
 def clean_environment() -> dict:
     env = {k: v for k, v in os.environ.items()
            if k not in ("VIRTUAL_ENV", "PYTHONPATH", "PYTHONHOME", "CONDA_PREFIX", "PYTHONSTARTUP")}
@@ -50,7 +61,7 @@ def run_case(script: Path | str, raw_out: Path | str, log_path: Path | str, time
     script, raw_out, log_path = Path(script), Path(raw_out), Path(log_path)
     raw_out.parent.mkdir(parents=True, exist_ok=True)
     log_path.parent.mkdir(parents=True, exist_ok=True)
-    cmd = [yade_executable(), "-n", "-j1", "-x", str(script.resolve()), str(raw_out.resolve())]
+    cmd = [*die_with_parent(), yade_executable(), "-n", "-j1", "-x", str(script.resolve()), str(raw_out.resolve())]
     start = time.time()
     cpu_start = resource.getrusage(resource.RUSAGE_CHILDREN)
     with open(log_path, "w") as log:

@@ -1,6 +1,8 @@
 """What the launcher makes of a run that produced no result: whether it is retried, and the reason
 that reaches the results table and the run summary. The logs below are what Debian's YADE
 2023.02a wrote for a refused case (captured from a real run) and a crashed one."""
+import re
+
 import pandas as pd
 import pytest
 
@@ -80,3 +82,54 @@ def test_a_timeout_says_where_the_run_was(tmp_path):
     log.write_text("[c] progress phase=move t=0.0504 s steps=33200\n\n[launcher] timed out after 2 s wall time\n")
     reason = failure_reason(None, "timeout", log, timeout_s=2.0)
     assert reason.startswith("timed out after 2 s wall time (outer timeout); killed: progress phase=move t=0.0504 s")
+
+
+@pytest.mark.faults
+def test_a_killed_launcher_takes_its_yade_run_with_it(tmp_path):
+    """YADE runs in a session of its own (the outer timeout kills its group), out of reach of a
+    `kill -9` of the workflow's process group: it must die with the launcher that started it, not
+    run on orphaned beside the resumed run of the same case. A stand-in `yade` (SPREADMAP_YADE)
+    that prints its pid and sleeps; the launcher's process is killed with SIGKILL."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    fake = tmp_path / "yade"
+    fake.write_text("#!/bin/sh\necho \"stand-in yade pid $$\"\nexec sleep 60\n")
+    fake.chmod(0o755)
+    code = ("import sys; from spreadmap.launcher import run_case; "
+            "run_case(sys.argv[1], sys.argv[2], sys.argv[3], 60)")
+    env = {**os.environ, "SPREADMAP_YADE": str(fake), "PYTHONPATH": str(Path(__file__).resolve().parent.parent)}
+    log = tmp_path / "run.log"
+    launcher = subprocess.Popen([sys.executable, "-c", code, str(tmp_path / "case.py"), str(tmp_path / "raw.json"), str(log)],
+                                env=env, stdin=subprocess.DEVNULL, start_new_session=True)
+    pid = None
+    try:
+        deadline = time.monotonic() + 30
+        while pid is None and time.monotonic() < deadline:
+            found = re.search(r"stand-in yade pid (\d+)", log.read_text()) if log.exists() else None
+            pid = int(found.group(1)) if found else time.sleep(0.05)
+        assert pid, "the stand-in yade did not start"
+        os.kill(launcher.pid, signal.SIGKILL)
+        launcher.wait()
+        deadline = time.monotonic() + 5
+        while alive(pid) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not alive(pid), f"yade (pid {pid}) outlived its launcher"
+        assert "--pdeathsig KILL" in log.read_text().splitlines()[0]  # the log's first line: what was run
+    finally:
+        for p in (launcher.pid, pid):
+            if p and alive(p):
+                os.kill(p, signal.SIGKILL)
+
+
+def alive(pid: int) -> bool:
+    """Whether pid runs (a zombie, dead but not yet reaped, does not count)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False

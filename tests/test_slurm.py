@@ -9,6 +9,7 @@ touched. Whatever the outcome, the cluster is stopped (its own pids only) and it
 """
 from __future__ import annotations
 
+import copy
 import csv
 import os
 import re
@@ -163,3 +164,76 @@ def test_smoke_study_through_slurm_equals_local_run(cluster, tmp_path):
         assert "NumCPUs=1 " in details and f"MinMemoryNode={mem_mb}M " in details, details
         assert f"TimeLimit={runtime // 60:02d}:{runtime % 60:02d}:00 " in details, details
     assert not (local / ".snakemake" / "slurm_logs").exists()
+
+
+@pytest.mark.faults
+@pytest.mark.yade
+@pytest.mark.slow
+def test_a_requeued_case_finishes_once(cluster, tmp_path):
+    """A case's SLURM job pre-empted and requeued (`scontrol requeue`) while YADE simulates: SLURM
+    kills it and runs the same job again; Snakemake waits for it (no second submission), the case
+    finishes once (one run to the end, one row) and the sweep's table has each case once."""
+    from conftest import FAST_SWEEP, deep_update, make_workflow
+
+    wf = make_workflow(tmp_path, deep_update(copy.deepcopy(FAST_SWEEP), {"sweeps": {"lds": {"seed": 42, "partitions": [2]}}}),
+                       ("sweeps", "points"))
+    env = cluster.env({k: v for k, v in os.environ.items() if not k.startswith("SLURM_")})
+    cmd = [sys.executable, "-m", "snakemake", "results/tables/lds.csv", "--workflow-profile", "profiles/slurm"]
+    log_path = wf / "snakemake.out"
+    started = time.monotonic()
+    requeued = None
+    with open(log_path, "w") as log:
+        proc = subprocess.Popen(cmd, cwd=wf, env=env, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                start_new_session=True)
+        try:
+            deadline = time.monotonic() + RUN_TIMEOUT_S
+            while requeued is None and proc.poll() is None and time.monotonic() < deadline:
+                jobs = {Path(path).parent.name: job_id for job_id, path in
+                        re.findall(r"submitted with SLURM jobid (\d+) \(log: (\S+?)\)\.", log_path.read_text(errors="replace"))}
+                for case, job_id in jobs.items():
+                    case_log = wf / "results" / "cases" / case / "run.log"
+                    if case_log.exists() and "start:" in case_log.read_text(errors="replace"):  # YADE simulates
+                        cluster.client("scontrol", "requeue", job_id)
+                        requeued = (case, job_id)
+                        break
+                time.sleep(0.1)
+            held = False  # seen out of RUNNING since the requeue
+            while requeued and proc.poll() is None and time.monotonic() < deadline:
+                # SLURM may hold a requeued job before it starts again (Reason=BeginTime): release it
+                # at once, as an admin would, so that the test does not wait out the hold
+                details = cluster.client("scontrol", "-o", "show", "job", requeued[1], check=False).stdout
+                if "JobState=PENDING" in details and "Reason=BeginTime" in details:
+                    cluster.client("scontrol", "update", f"JobId={requeued[1]}", "StartTime=now", check=False)
+                held = held or "JobState=RUNNING" not in details
+                if held and ("JobState=RUNNING" in details or "JobState=COMPLETED" in details):
+                    break  # running again
+                time.sleep(0.5)
+            code = proc.wait(timeout=max(1, deadline - time.monotonic()))
+        except BaseException:
+            stop_run(proc)
+            raise
+    output = log_path.read_text(errors="replace")
+    print(f"\n[slurm] the run with a requeued job took {time.monotonic() - started:.0f} s")
+    assert requeued, "no SLURM job was caught simulating:\n" + output[-3000:]
+    assert code == 0, output[-5000:]
+    case, job_id = requeued
+    details = cluster.client("scontrol", "-o", "show", "job", job_id).stdout
+    assert "JobState=COMPLETED" in details and "Restarts=1 " in details, details  # requeued once, then finished
+
+    # one SLURM job per case: Snakemake did not submit the requeued case a second time
+    submitted = re.findall(r"submitted with SLURM jobid (\d+) \(log: (\S+?)\)\.", output)
+    per_case = {}
+    for jid, path in submitted:
+        per_case.setdefault(Path(path).parent.name, []).append(jid)
+    assert per_case[case] == [job_id] and all(len(ids) == 1 for ids in per_case.values()), per_case
+    # the case ran to the end once: one "ok after" line of scripts/run_case.py in its job's log
+    job_log = (wf / ".snakemake" / "slurm_logs" / "rule_run_case" / case / f"{job_id}.log").read_text(errors="replace")
+    assert len(re.findall(rf"^{case}: ok after", job_log, re.M)) == 1, job_log[-3000:]
+    table = read_table_at(wf / "results" / "tables" / "lds.csv")
+    assert sorted(row["case_id"] for row in table) == sorted(per_case) and len(table) == 2  # one row each
+    assert all(row["status"] == "ok" for row in table), [(row["case_id"], row["reason"]) for row in table]
+
+
+def read_table_at(path: Path) -> list[dict]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))

@@ -50,9 +50,11 @@ def test_growing_lds_from_4_to_8_runs_exactly_the_4_new_cases(tmp_path):
     assert planned_jobs(snakemake(wf, "sweeps", "-n").stdout) == {}  # nothing left to do
 
 
+@pytest.mark.faults
 def test_a_failed_case_is_recorded_with_its_reason_and_the_others_finish(tmp_path):
     """A chosen point at a preset with a 2 s outer timeout fails twice (first attempt + one retry),
-    is recorded as failed with the reason, and the sweep's cases finish."""
+    is recorded as failed with the reason and its log, and the sweep's cases finish. Issue 35's
+    hanging case: the outer timeout ends a run however it hangs (its whole process group killed)."""
     broken = {"presets": {"broken": {**FAST_SWEEP.get("presets", {}), "width_d": 3, "heap_height_d": 4,
                                      "pile_length_min_d": 4, "heap_reserve": 1.2, "transient_d": 1, "window_d": 3,
                                      "dt_factor": 0.35, "density_scale": 1000, "timeout_s": 2}},
@@ -65,6 +67,9 @@ def test_a_failed_case_is_recorded_with_its_reason_and_the_others_finish(tmp_pat
     points = pd.read_csv(wf / "results" / "tables" / "points.csv")
     assert points.loc[0, "status"] == "failed" and "timed out after 2 s" in points.loc[0, "reason"]
     assert bool(points.loc[0, "flagged"])
+    # the reason names the case's log, which ends with what the launcher did
+    case_log = re.search(r"\(log: (\S+)\)$", points.loc[0, "reason"]).group(1)
+    assert (wf / case_log).read_text().rstrip().endswith("[launcher] timed out after 2 s wall time (outer timeout); killed")
     lds = pd.read_csv(wf / "results" / "tables" / "lds.csv")
     assert len(lds) == 3 and (lds["status"] == "ok").all()
     summary = json.loads((wf / "results" / "sweeps_summary.json").read_text())
@@ -74,6 +79,7 @@ def test_a_failed_case_is_recorded_with_its_reason_and_the_others_finish(tmp_pat
     assert re.search(r"broken-f0\.3000-d20\.000-h60\.000-v5\.0000-s1-[0-9a-f]{8}: failed: timed out", text), text
 
 
+@pytest.mark.faults
 def test_killed_run_resumes_without_redoing_finished_cases(tmp_path):
     wf = make_workflow(tmp_path, lds_only([5]), DROP)
     log = open(tmp_path / "killed-run.log", "w")
