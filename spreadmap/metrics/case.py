@@ -31,7 +31,8 @@ MIN_HEAP_H2 = 0.7
 # stability.max_wedge_overlap_ratio's default (the schema's): a sphere the moving blade presses
 # (the wedge, peak_overlap_wedged) is not a time-step matter and is not held to max_overlap_ratio,
 # but no wedge of a sound step goes this deep: the largest of ~1,400 published cases is 0.174 R
-# (docs/study/cases_converge.csv), a step too large near the blade goes further (tests/test_stability_yade.py)
+# (docs/study/cases_converge.csv); a step too large goes further (0.92-0.95 x critical: 1.25-1.48 R, but the
+# whole bed blew up with it; no step was seen unstable near the blade alone: tests/test_stability_yade.py)
 MAX_WEDGE_OVERLAP = 0.25
 
 
