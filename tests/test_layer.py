@@ -247,3 +247,42 @@ def test_block_error_of_coverage_against_the_binomial_of_independent_blocks():
     p = full.mean()
     assert got["coverage"] == pytest.approx(p * math.pi / 4, rel=GRID_REL)
     assert got["coverage_sd"] == pytest.approx(math.sqrt(p * (1 - p) / 9) * math.pi / 4, rel=5e-3)
+
+
+def close_packed(nx, rows, layers):
+    """Face-centred cubic spheres stacked ABC along z (close-packed layers, layer spacing d sqrt(2/3)),
+    over a region nx d long and rows d sqrt(3) wide (whole periods of the layer), with a margin of
+    spheres beyond the region so that the surface and the solid inside it are the lattice's."""
+    c, width = D * math.sqrt(2.0 / 3.0), rows * D * math.sqrt(3.0)
+    offsets = [(0.0, 0.0), (D / 2, D * math.sqrt(3.0) / 6), (D, D * math.sqrt(3.0) / 3)]
+    centres = []
+    for k in range(layers):
+        ox, oy = offsets[k % 3]
+        for j in range(-3, 2 * rows + 4):
+            for i in range(-3, nx + 4):
+                x, y = ox + i * D + (j % 2) * D / 2, oy + j * D * math.sqrt(3.0) / 2
+                if -D <= x <= (nx + 1) * D and -D <= y <= width + D:
+                    centres.append((x, y, R + k * c))
+    return np.array(centres), width
+
+
+def test_close_packed_layers_against_the_known_packing_fraction():
+    """A thick bed of known packing: every close-packed layer added to an FCC stack adds its solid
+    and raises the surface by one layer spacing, so the added solid over the added volume under the
+    surface is the FCC fraction pi / (3 sqrt 2) = 0.7405 (a number from geometry, not from this code).
+    The layer fill of the whole stack starts at the monolayer's 4/5 and falls towards 0.7405 as the
+    bed thickens: it is a volume fraction of the region under the surface, not a bulk packing fraction."""
+    fcc = math.pi / (3.0 * math.sqrt(2.0))
+    got = {}
+    for n in (1, 4, 6):
+        centres, width = close_packed(4, 2, n)
+        got[n] = layer_quality(centres, R, 0.0, 4 * D, width, SPACING)
+    # one close-packed layer: coverage pi / (2 sqrt 3), fill 4/5 (its shadows touch, never overlap)
+    assert got[1]["coverage"] == pytest.approx(math.pi / (2.0 * math.sqrt(3.0)), rel=GRID_REL)
+    assert got[1]["layer_packing"] == pytest.approx(0.8, rel=GRID_REL)
+    added_solid = got[6]["solid_volume"] - got[4]["solid_volume"]
+    added_volume = (got[6]["thickness"] - got[4]["thickness"]) * got[6]["area"]
+    # 16 spheres a layer: the area 4 d x 2 sqrt(3) d at 2 / (sqrt(3) d^2) spheres per area
+    assert added_solid == pytest.approx(2 * 16 * (4 / 3) * math.pi * R ** 3, rel=1e-9)
+    assert added_solid / added_volume == pytest.approx(fcc, rel=GRID_REL)
+    assert 0.8 > got[4]["layer_packing"] > got[6]["layer_packing"] > fcc

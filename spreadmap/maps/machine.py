@@ -19,7 +19,7 @@ from ..design import BY_NAME
 from ..figures import new_figure, save_figure
 from . import grids
 from .labels import end_label, which_labelled
-from .style import HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
+from .style import DEFINITIONS, HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
 
 
 def machine_map(model, stem, y: str = "pd", f: float = 0.45, d_um: float = 45.0, n_h: int = 5, n_v: int = 5,
@@ -103,6 +103,8 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
     ax.legend(handles=handles, loc="best", fontsize=7.5, framealpha=0.9)
     ax.set_xlabel(LABELS["mfr"])
     ax.set_ylabel(LABELS.get(y, y))
+    if y in DEFINITIONS:
+        fig.text(0.02, -0.045, DEFINITIONS[y], fontsize=7, va="top", ha="left", color="0.25")
     if y_note:  # how far y is from MFR in disguise, across the sample
         ax.text(0.01, 0.01, y_note, transform=ax.transAxes, fontsize=7, va="bottom", ha="left", color="0.25")
     ax.grid(alpha=0.3)

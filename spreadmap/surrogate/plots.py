@@ -22,7 +22,7 @@ from ..figures import new_figure, save_figure
 from . import validation
 
 COLOURS = {"gp": "tab:blue", "mlp": "tab:orange"}
-LONG = {"mfr": "MFR", "pd": "PD", "layer_packing": "layer packing", "coverage": "coverage",
+LONG = {"mfr": "MFR", "pd": "PD", "layer_packing": "layer fill", "coverage": "coverage",
         "roughness_d": "roughness / d", "thickness_ratio": "layer thickness / h"}
 
 

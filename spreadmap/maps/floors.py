@@ -1,0 +1,90 @@
+"""The numbers behind the two floors' comparison: one map model per floor, their ratio and difference.
+
+Each floor's main job leaves its own map model (results/surrogate/model.joblib, fitted on that floor's
+cases). At a design point each model gives the mean of a target and the model SD of that mean (what
+its posterior does not know; not the noise of one run). The two floors' cases are independent, so the
+two posteriors are too, and at one point
+
+    ratio = mean on floor A / mean on floor B,    difference = mean on A - mean on B.
+
+The difference is normal: its SD is sqrt(sd_A^2 + sd_B^2). The ratio of two independent normals
+has no closed-form quantiles, but while floor B's mean is positive its CDF has one:
+
+    P(A / B <= r) = P(A - r B <= 0) = Phi((r m_B - m_A) / sqrt(sd_A^2 + r^2 sd_B^2)),
+
+so the ratio's quantiles are the roots of that in r (the limits of Fieller's interval). They are found by
+bisection here; where floor B's own interval reaches `min_value` (a mean that may be nothing, a
+jammed flow) the ratio is not defined and is reported as NaN with ``<t>_ratio_defined`` false.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from ..design import NAMES, bounds
+
+
+def ratio_quantile(m_a, s_a, m_b, s_b, q: float, lo: float = 1e-3, hi: float = 1e3, iterations: int = 80) -> np.ndarray:
+    """The q-quantile of A / B, A ~ N(m_a, s_a^2) and B ~ N(m_b, s_b^2) independent, B > 0 assumed:
+    the r at which Phi((r m_b - m_a) / sqrt(s_a^2 + r^2 s_b^2)) = q, by bisection on [lo, hi] (the CDF
+    rises in r while m_b > 0). Arrays broadcast."""
+    m_a, s_a, m_b, s_b = np.broadcast_arrays(*(np.asarray(x, float) for x in (m_a, s_a, m_b, s_b)))
+    z = stats.norm.ppf(q)
+    low, high = np.full(m_a.shape, lo), np.full(m_a.shape, hi)
+    for _ in range(iterations):
+        mid = np.sqrt(low * high)  # the ratio is positive here: bisect on its logarithm
+        below = (mid * m_b - m_a) / np.sqrt(s_a**2 + mid**2 * s_b**2) < z
+        low, high = np.where(below, mid, low), np.where(below, high, mid)
+    return np.sqrt(low * high)
+
+
+def compare(model_a, model_b, frame: pd.DataFrame, targets, level: float = 0.95, min_value: float = 0.02) -> pd.DataFrame:
+    """Per point of ``frame`` (columns NAMES) and target: ``<t>_a``, ``<t>_a_sd``, ``<t>_b``,
+    ``<t>_b_sd`` (means and model SDs on each floor), ``<t>_diff`` with ``_lo``/``_hi`` (the interval
+    at ``level``), ``<t>_ratio`` (median) with ``_lo``/``_hi``, and ``<t>_ratio_defined``: floor B's
+    lower bound at ``level`` above ``min_value`` and floor A's mean positive. Also ``h_over_d``."""
+    X = frame[list(NAMES)].to_numpy(float)
+    out = frame[list(NAMES)].copy()
+    out["h_over_d"] = X[:, 2] / X[:, 1]
+    a_stats, b_stats = model_a.predict_stats(X), model_b.predict_stats(X)
+    z = stats.norm.ppf(0.5 + level / 2.0)
+    for t in targets:
+        m_a, s_a = a_stats[t][0], a_stats[t][1]
+        m_b, s_b = b_stats[t][0], b_stats[t][1]
+        out[f"{t}_a"], out[f"{t}_a_sd"], out[f"{t}_b"], out[f"{t}_b_sd"] = m_a, s_a, m_b, s_b
+        diff, diff_sd = m_a - m_b, np.hypot(s_a, s_b)
+        out[f"{t}_diff"], out[f"{t}_diff_lo"], out[f"{t}_diff_hi"] = diff, diff - z * diff_sd, diff + z * diff_sd
+        defined = (m_b - z * s_b > min_value) & (m_a > 0)
+        q = [ratio_quantile(m_a, s_a, m_b, s_b, p) for p in (0.5 - level / 2.0, 0.5, 0.5 + level / 2.0)]
+        for name, value in zip(("_ratio_lo", "_ratio", "_ratio_hi"), q):
+            out[f"{t}{name}"] = np.where(defined, value, np.nan)
+        out[f"{t}_ratio_defined"] = defined
+    return out
+
+
+def box_sample(n: int, seed: int = 0, ranges=None) -> pd.DataFrame:
+    """n scrambled-Sobol' points over the design box (scipy.stats.qmc; n a power of 2)."""
+    from scipy.stats import qmc
+
+    low, high = bounds(ranges)
+    u = qmc.Sobol(len(NAMES), scramble=True, seed=seed).random(n)
+    return pd.DataFrame(qmc.scale(u, low, high), columns=list(NAMES))
+
+
+def by_band(table: pd.DataFrame, target: str, edges=(1.0, 1.5, 2.0, 3.0, 5.0, 8.0)) -> pd.DataFrame:
+    """The ratio's spread over the box per h/d band: points, share with the ratio defined, the median
+    of the points' median ratios and their range, and the median of the points' interval widths."""
+    rows = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        part = table[(table["h_over_d"] >= lo) & (table["h_over_d"] < hi)]
+        ok = part[part[f"{target}_ratio_defined"]]
+        rows.append({"h_over_d_from": lo, "h_over_d_below": hi, "points": len(part),
+                     "ratio_defined": len(ok),
+                     "ratio_median": float(ok[f"{target}_ratio"].median()) if len(ok) else np.nan,
+                     "ratio_min": float(ok[f"{target}_ratio"].min()) if len(ok) else np.nan,
+                     "ratio_max": float(ok[f"{target}_ratio"].max()) if len(ok) else np.nan,
+                     "interval_width_median": float((ok[f"{target}_ratio_hi"] - ok[f"{target}_ratio_lo"]).median())
+                     if len(ok) else np.nan,
+                     "diff_median": float(part[f"{target}_diff"].median()) if len(part) else np.nan})
+    return pd.DataFrame(rows)
