@@ -18,6 +18,7 @@ from spreadmap.migrate_cases import legacy_case_folders
 from spreadmap.scene import UnsafeTimeStep
 from spreadmap.study_cases import loop_labels, planned_cases
 from spreadmap.substrate import floor_label
+from spreadmap.surrogate.correction import Correction, uncorrected_label
 
 try:
     spreadmap_config.validate(config)
@@ -33,6 +34,10 @@ RANGES = config.get("ranges")
 SCENE_SHA256 = template_sha256()
 SWEEPS = config.get("sweeps") or {}
 FLOOR = floor_label(config)  # the floor the cases are spread on, named on every map, table and report
+# what the map model's numbers are: the floor, and the preset's step to `reference` when config
+# `fidelity_correction` gives one (spreadmap.surrogate.correction); named on every map and decision
+_CORRECTION = Correction.from_config(config)
+MAP_BASIS = FLOOR + "; " + (_CORRECTION.label() if _CORRECTION else uncorrected_label(config["preset"]))
 
 
 def add_case(point, preset=None, seed=None):

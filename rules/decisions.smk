@@ -13,7 +13,7 @@ rule decide:
     params:
         decisions=DECISIONS,
         support=MAPS.get("support", {}),
-        floor=FLOOR,
+        floor=MAP_BASIS,
     log:
         "logs/decisions.log",
     localrule: True
@@ -35,7 +35,7 @@ rule explorer:
     params:
         decisions=DECISIONS,
         support=MAPS.get("support", {}),
-        floor=FLOOR,
+        floor=MAP_BASIS,
     log:
         "logs/explorer.log",
     localrule: True

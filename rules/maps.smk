@@ -16,7 +16,7 @@ rule maps:
         y_choice="results/maps/machine_y_choice.csv",
     params:
         maps=MAPS,
-        floor=FLOOR,
+        floor=MAP_BASIS,
         regime=config["regime"],
         ranges=RANGES,
         noise_calibration=config.get("noise_calibration", []),

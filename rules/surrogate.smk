@@ -19,6 +19,8 @@ rule surrogate:
         noise_model=config.get("noise_model"),
         counting_c=config.get("metrics", {}).get("counting_noise_c", 0.37),
         floor=FLOOR,
+        correction=config.get("fidelity_correction"),
+        preset=config["preset"],
     log:
         "logs/surrogate.log",
     localrule: True

@@ -7,6 +7,7 @@ from spreadmap.logs import log_to
 from spreadmap.noise_law.apply import case_noise
 from spreadmap.records import read_table
 from spreadmap.surrogate import fit_surrogate, save_model
+from spreadmap.surrogate.correction import Correction
 from spreadmap.surrogate.plots import plot_all
 
 log_to(snakemake)  # noqa: F821
@@ -16,6 +17,14 @@ sm = snakemake  # noqa: F821
 # region (config noise_calibration); the table keeps the stated ones
 table = case_noise(read_table(sm.input.table), sm.params.noise_model, sm.params.noise_calibration, sm.params.counting_c)
 result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table, ranges=sm.params.ranges)
+# the map model's numbers as `reference` would read them, where config fidelity_correction gives a
+# factor (the validation above and its figures stay against the cases' own preset)
+correction = Correction.from_config({"fidelity_correction": sm.params.correction, "preset": sm.params.preset})
+if correction is not None:
+    result.model.correction = correction
+    result.model.metadata["fidelity_correction"] = {"label": correction.label(result.model.targets),
+                                                    "factors": correction.factors, "source": correction.source}
+    print(f"map model's means: {correction.label(result.model.targets)}")
 save_model(result.model, sm.output.model)
 plot_all(result, Path(sm.output.model).parent, prefix="surrogate", floor=sm.params.floor)
 with pd.option_context("display.width", 250, "display.max_columns", None):

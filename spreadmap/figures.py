@@ -4,6 +4,7 @@ the floor they were measured on (spreadmap.substrate.floor_label) above its titl
 `floor` column of its CSV."""
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -26,7 +27,8 @@ def new_figure(width: float, height: float) -> Figure:
 
 def floor_note(fig, floor: str) -> None:
     """Write the floor (and the gap it implies) as a line above everything else on the figure."""
-    fig.text(0.5, 1.0, floor, ha="center", va="bottom", fontsize=9, color="0.15")
+    fig.text(0.5, 1.0, textwrap.fill(floor, 110, break_long_words=False), ha="center", va="bottom", fontsize=9,
+             color="0.15")
 
 
 def save_figure(fig, path_stem, data: pd.DataFrame, floor: str | None = None) -> dict[str, Path]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import NullFormatter
 
 from ..design import TARGETS
 from ..figures import new_figure, save_figure
@@ -102,3 +103,32 @@ def knobs_figure(knobs: pd.DataFrame, base_preset: str, path_stem) -> dict:
     axes[0].legend(fontsize=8, loc="lower left")
     fig.suptitle(f"One knob at a time from '{base_preset}' (dotted: its value; bars: seed SD)", fontsize=10)
     return save_figure(fig, path_stem, knobs)
+
+
+def correction_figure(result: dict, pairs: pd.DataFrame, path_stem, floor: str | None = None) -> dict:
+    """Per target (spreadmap.fidelity.correction): each pair's and each point's reference / preset
+    against h/d, the factor the maps take and its 95 % interval at a point not run."""
+    targets = list(result["targets"])
+    fig = new_figure(5.2 * len(targets), 4.2)
+    axes = fig.subplots(1, len(targets), squeeze=False)[0]
+    for ax, t in zip(axes, targets):
+        r = result["targets"][t]
+        pts = pd.DataFrame(r["per_point"])
+        ax.plot(pairs["h_over_d"], np.exp(pairs[f"{t}_l"]), "o", ms=3, color="0.6", label="a pair (one seed)")
+        ax.errorbar(pts["h_over_d"], np.exp(pts["l"]), yerr=1.96 * pts["se"] * np.exp(pts["l"]), fmt="s", ms=5,
+                    color="tab:blue", capsize=3, label="a point: mean of its pairs, 95 % (stated noise)")
+        lo, hi = r["new_point_95"]
+        ax.axhspan(lo, hi, color="tab:orange", alpha=0.18, label=f"at a point not run, 95 %: {lo:.3f}-{hi:.3f}")
+        ax.axhline(r["factor"], color="tab:orange", lw=1.5, label=f"factor the maps take: {r['factor']:.3f}")
+        ax.axhline(1.0, color="black", lw=0.8)
+        ax.set_xscale("log")
+        ticks = [x for x in (1, 1.2, 1.5, 2, 3, 5, 7) if 0.9 * pairs["h_over_d"].min() <= x <= 1.1 * pairs["h_over_d"].max()]
+        ax.set_xticks(ticks, [f"{x:g}" for x in ticks])
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("gap / particle diameter h/d [-]")
+        ax.set_ylabel(f"{t.upper()}: {result['reference']} / {result['preset']} [-]")
+        re = r["random_effects"]
+        ax.set_title(f"{t.upper()}: {result['pairs']} pairs at {result['points']} points; points differ beyond noise: "
+                     f"Q {re['q']:.1f} on {re['dof']} dof, p {re['q_p']:.2f}", fontsize=8)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
+    return save_figure(fig, path_stem, pairs, floor)

@@ -47,6 +47,7 @@ class SurrogateModel:
     metadata: dict = field(default_factory=dict)
     format: str = FORMAT
     names: tuple = NAMES
+    correction: object = None           # spreadmap.surrogate.correction.Correction, or None (as the preset reads)
 
     # ---- where the data are -------------------------------------------------------------------
     def unit(self, X) -> np.ndarray:
@@ -69,13 +70,20 @@ class SurrogateModel:
 
     # ---- predictions --------------------------------------------------------------------------
     def predict_stats(self, X) -> dict:
-        """target -> (mean, model SD, SD of a new DEM run) at X (n, 4)."""
-        return {t: self.models[t].predictive(np.asarray(X, float)) for t in self.targets}
+        """target -> (mean, model SD, SD of a new DEM run) at X (n, 4); with a ``correction``, as the
+        finer preset would read them (spreadmap.surrogate.correction)."""
+        out = {t: self.models[t].predictive(np.asarray(X, float)) for t in self.targets}
+        if self.correction is not None:
+            out = {t: self.correction.stats(t, *v) for t, v in out.items()}
+        return out
 
     def draws(self, X, n: int, seed: int = 0, targets=None) -> dict:
         """target -> (n, len(X)) draws of the mean function (GP posterior or MLP members)."""
         rng = np.random.default_rng(seed)
-        return {t: self.models[t].draws(np.asarray(X, float), n, rng) for t in (targets or self.targets)}
+        out = {t: self.models[t].draws(np.asarray(X, float), n, rng) for t in (targets or self.targets)}
+        if self.correction is not None:
+            out = {t: self.correction.draws(t, v, rng) for t, v in out.items()}
+        return out
 
     def kind(self, target: str) -> str:
         return self.models[target].kind
@@ -83,7 +91,10 @@ class SurrogateModel:
     def __call__(self, points) -> np.ndarray:
         """The package's predictor convention: (n, 4) physical -> (n, 2) mean MFR and PD."""
         X = np.asarray(points, float)
-        return np.column_stack([self.models[t].latent(X)[0] for t in ("mfr", "pd")])
+        means = [self.models[t].latent(X)[0] for t in ("mfr", "pd")]
+        if self.correction is not None:
+            means = [self.correction.stats(t, m, 0.0 * m, 0.0 * m)[0] for t, m in zip(("mfr", "pd"), means)]
+        return np.column_stack(means)
 
 
 def sidecar_path(path) -> Path:

@@ -1,0 +1,72 @@
+"""The maps' step from the preset that ran to the finest one: a measured factor and its uncertainty.
+
+The main job runs the `default` preset; the fidelity study measures, at paired points and packing
+seeds, what `reference` reads against it (spreadmap.fidelity.correction, docs/fidelity/correction).
+Where config `fidelity_correction` gives a target a factor k with a standard error s_k, the saved map
+model reports that target as `reference` would read it:
+
+    mean' = k mean,    model SD' = sqrt(k^2 model SD^2 + mean^2 s_k^2 + model SD^2 s_k^2),
+
+(the exact variance of the product of two independent normal quantities; the run SD likewise), and
+each posterior draw of the map is multiplied by one draw of k, the same over every point of a map
+(the factor is one number, so its error moves the whole map together). The loop's stop rule does
+not see it: the map's own error against the DEM of its preset is what sampling can reduce; the
+factor's error is what the fidelity study can. Targets without a factor stay as their preset reads
+them, and the maps say so.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Correction:
+    """target -> (factor, its SD); `preset` ran, `reference` is what the factors lead to."""
+
+    factors: dict
+    preset: str
+    reference: str
+    source: str = ""
+
+    @classmethod
+    def from_config(cls, config: dict | None) -> "Correction | None":
+        section = (config or {}).get("fidelity_correction")
+        if not section:
+            return None
+        factors = {t: (float(v["factor"]), float(v["sd"])) for t, v in section.get("targets", {}).items()}
+        for t, (k, s) in factors.items():
+            if not (k > 0 and s >= 0):
+                raise ValueError(f"config fidelity_correction.targets.{t}: factor {k} must be > 0 and sd {s} >= 0")
+        preset = section.get("preset") or (config or {}).get("preset", "default")
+        return cls(factors, str(preset), str(section.get("reference", "reference")), str(section.get("source", "")))
+
+    def stats(self, target: str, mean, model_sd, run_sd):
+        """(mean, model SD, run SD) of `target` after its factor; unchanged without one."""
+        if target not in self.factors:
+            return mean, model_sd, run_sd
+        k, s = self.factors[target]
+        mean, model_sd, run_sd = (np.asarray(x, float) for x in (mean, model_sd, run_sd))
+        return (k * mean, np.sqrt(k**2 * model_sd**2 + (mean**2 + model_sd**2) * s**2),
+                np.sqrt(k**2 * run_sd**2 + (mean**2 + run_sd**2) * s**2))
+
+    def draws(self, target: str, draws: np.ndarray, rng) -> np.ndarray:
+        """(n, points) draws of the map times one draw of the factor per row."""
+        if target not in self.factors:
+            return draws
+        k, s = self.factors[target]
+        return draws * rng.normal(k, s, size=(len(draws), 1))
+
+    def label(self, targets=("mfr", "pd")) -> str:
+        """One line for a map: what the means are, e.g. "`default` corrected to `reference`: MFR x1.031 (SE 0.010)"."""
+        parts = [f"{t.upper() if t in ('mfr', 'pd') else t} x{k:.3f} (SE {s:.3f})" for t, (k, s) in self.factors.items()]
+        rest = [t for t in targets if t not in self.factors]
+        text = f"`{self.preset}` corrected to `{self.reference}`: " + ", ".join(parts)
+        if rest:
+            text += "; " + ", ".join(rest) + f" as `{self.preset}` reads"
+        return text
+
+
+def uncorrected_label(preset: str, reference: str = "reference") -> str:
+    return f"`{preset}` preset, not corrected to `{reference}`"

@@ -1,0 +1,75 @@
+"""The preset-to-reference correction of the map model (spreadmap.surrogate.correction): the product's
+moments against Monte Carlo draws, the saved model's predictions and draws, the config's errors. No YADE."""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import synthetic_cases as syn
+
+from spreadmap.surrogate import fitting, saved_model
+from spreadmap.surrogate.correction import Correction, uncorrected_label
+
+QUICK = {"cv_repeats": 1, "cv_folds": 3, "gp_restarts": 0, "learning_curve": False, "mlp_sizes": [4], "mlp_alphas": [1.0],
+         "ensemble_members": 4, "neurons": [2], "seeds": [0]}
+SECTION = {"preset": "default", "reference": "reference",
+           "targets": {"mfr": {"factor": 1.04, "sd": 0.012}, "pd": {"factor": 1.02, "sd": 0.01}}}
+
+
+@pytest.fixture(scope="module")
+def model():
+    return fitting.fit_surrogate(syn.table(40, 0.03, seed=2), QUICK, log=lambda *a: None).model
+
+
+def test_stats_are_the_moments_of_the_product_of_independent_normals():
+    corr = Correction.from_config({"fidelity_correction": SECTION})
+    mean, msd, rsd = np.array([0.3, 0.5]), np.array([0.01, 0.03]), np.array([0.02, 0.04])
+    m2, s2, r2 = corr.stats("mfr", mean, msd, rsd)
+    rng = np.random.default_rng(0)
+    n = 1_000_000
+    k = rng.normal(1.04, 0.012, n)
+    for i in range(2):
+        product = rng.normal(mean[i], msd[i], n) * k
+        assert m2[i] == pytest.approx(product.mean(), rel=2e-3)
+        assert s2[i] == pytest.approx(product.std(), rel=5e-3)
+    assert r2[1] == pytest.approx(np.sqrt(1.04**2 * 0.04**2 + (0.5**2 + 0.04**2) * 0.012**2))
+    # a target without a factor is left as it is
+    assert corr.stats("coverage", mean, msd, rsd)[0] is mean
+
+
+def test_saved_model_reads_through_the_correction(model):
+    corr = Correction.from_config({"fidelity_correction": SECTION})
+    fixed = dataclasses.replace(model, correction=corr)
+    X = np.array([[0.3, 30.0, 65.0, 10.0], [0.2, 45.0, 57.0, 6.0], [0.4, 15.0, 70.0, 14.0]])
+    plain, got = model.predict_stats(X), fixed.predict_stats(X)
+    assert got["mfr"][0] == pytest.approx(1.04 * plain["mfr"][0])
+    assert got["pd"][0] == pytest.approx(1.02 * plain["pd"][0])
+    assert (got["mfr"][1] > 1.04 * plain["mfr"][1]).all()
+    assert fixed(X)[:, 0] == pytest.approx(1.04 * model(X)[:, 0])
+    # draws: the factor is one number per draw, so it moves every point of a map together
+    d_plain, d_fixed = model.draws(X, 4000, seed=1)["mfr"], fixed.draws(X, 4000, seed=1)["mfr"]
+    assert d_fixed.mean(axis=0) == pytest.approx(1.04 * d_plain.mean(axis=0), rel=5e-3)
+    ratio = d_fixed / d_plain[:, :]  # the same posterior draws (same seed), times one k per row
+    assert np.allclose(ratio, ratio[:, :1])
+    assert ratio[:, 0].std() == pytest.approx(0.012, rel=0.06)
+
+
+def test_saved_and_loaded_model_keeps_its_correction(model, tmp_path):
+    corr = Correction.from_config({"fidelity_correction": SECTION})
+    path = tmp_path / "m.joblib"
+    saved_model.save_model(dataclasses.replace(model, correction=corr), path)
+    back = saved_model.load_model(path)
+    assert back.correction == corr
+    X = np.array([[0.3, 30.0, 65.0, 10.0]])
+    assert back.predict_stats(X)["mfr"][0] == pytest.approx(1.04 * model.predict_stats(X)["mfr"][0])
+
+
+def test_config_and_labels():
+    assert Correction.from_config({}) is None and Correction.from_config({"fidelity_correction": None}) is None
+    corr = Correction.from_config({"fidelity_correction": SECTION})
+    assert corr.label(("mfr", "pd", "coverage")) == ("`default` corrected to `reference`: MFR x1.040 (SE 0.012), "
+                                                    "PD x1.020 (SE 0.010); coverage as `default` reads")
+    with pytest.raises(ValueError, match="fidelity_correction.targets.mfr"):
+        Correction.from_config({"fidelity_correction": {"targets": {"mfr": {"factor": -1, "sd": 0.1}}}})
+    assert uncorrected_label("default") == "`default` preset, not corrected to `reference`"
