@@ -180,3 +180,30 @@ def test_rolling_resistance_option_runs_and_stops_rolling(config, tmp_path):
     assert not runs[True]["flagged"]
     assert runs[True]["final_ke_per_mgd"] < runs[False]["final_ke_per_mgd"]
     assert runs[True]["rolled_off_particles"] <= runs[False]["rolled_off_particles"]
+
+
+def test_flat_floor_at_the_thinnest_gap_does_not_drain(config, tmp_path):
+    """The study's flat floor at h/d 1.1 (d 50 um, h 55 um, f 0.45, v 5 mm/s: where the pile of the
+    earlier scenes drained at the `default` preset, 75-153 spheres rolling off and every seed
+    flagged): at the smoke preset the heap ahead of the blade stays far above the run-down bound
+    through the window, few spheres roll off the floor, the flow does not fall, and the case is not
+    flagged. A limit of this check: the smoke window is 3 d short and its pile is not fed, so it
+    reads the same with `scene.fed_heap` off (measured 2026-12-04); with a 5 d bed and a `default`-
+    length window the flow there stops whether fed or not (flagged unsteady, the heap full: docs/floors).
+    The flat floor's main job at `default` (10 d bed, fed) is the evidence at full length (docs/floors)."""
+    import copy
+
+    cfg = copy.deepcopy(config)
+    cfg["scene"]["substrate"]["kind"] = "flat"
+    params = case_params(cfg, {"f": 0.45, "d_um": 50.0, "h_um": 55.0, "v_mm_s": 5.0}, "smoke")
+    assert params["substrate"] == "flat"
+    result, raw = run_scene(params, tmp_path)
+    assert result["outcome"] == "ok", result
+    m = case_metrics(raw, cfg["regime"], cfg["stability"], cfg["metrics"])
+    print({k: m[k] for k in ("mfr", "n_particles", "rolled_off_particles", "heap_start_h2", "heap_end_h2",
+                             "flow_trend_z", "regime")})
+    assert m["heap_end_h2"] > 5 * cfg["stability"]["min_heap_h2"]
+    assert m["rolled_off_particles"] < 0.2 * m["n_particles"]
+    assert m["flow_trend_z"] > -cfg["stability"]["max_flow_decline_z"]
+    assert m["mfr"] > cfg["regime"]["jam_mfr_max"]  # powder passes: not a drained, jammed pile
+    assert not m["flagged"], m["flag_reason"]
