@@ -73,3 +73,21 @@ def test_config_and_labels():
     with pytest.raises(ValueError, match="fidelity_correction.targets.mfr"):
         Correction.from_config({"fidelity_correction": {"targets": {"mfr": {"factor": -1, "sd": 0.1}}}})
     assert uncorrected_label("default") == "`default` preset, not corrected to `reference`"
+
+
+def test_maps_support_is_the_models_own_not_the_factors(model):
+    """A factor widens every SD (here far beyond one run's noise) but is no lack of data: the maps'
+    support (spreadmap.maps.grids.evaluate) reads the model's own SD, so it is the same either way,
+    while the drawn SDs carry the factor's error."""
+    from spreadmap.maps import grids
+
+    wide = Correction.from_config({"fidelity_correction": {"targets": {"mfr": {"factor": 1.05, "sd": 0.2}}}})
+    fixed = dataclasses.replace(model, correction=wide)
+    frame = grids.grid_frame(f=[0.3], d_um=[20.0, 35.0, 50.0], h_um=[55.0, 65.0, 75.0], v_mm_s=[10.0])
+    support = {"max_distance": 1.5, "max_sd_ratio": 1.0}
+    plain, got = grids.evaluate(model, frame, ["mfr"], support), grids.evaluate(fixed, frame, ["mfr"], support)
+    assert got["supported"].tolist() == plain["supported"].tolist() and plain["supported"].any()
+    assert got["mfr_sd_ratio"].to_numpy() == pytest.approx(plain["mfr_sd_ratio"].to_numpy())
+    m, s = plain["mfr"].to_numpy(), plain["mfr_model_sd"].to_numpy()
+    assert got["mfr_model_sd"].to_numpy() == pytest.approx(np.sqrt(1.05**2 * s**2 + (m**2 + s**2) * 0.2**2))
+    assert (got["mfr_model_sd"] > got["mfr_noise_sd"]).any()  # wider than one run's noise, still supported

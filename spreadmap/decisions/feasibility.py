@@ -146,7 +146,7 @@ def feasibility(model, powder: Powder, h, v, bounds: dict, quality: dict, suppor
     X = np.column_stack([np.tile(P, (len(settings), 1)), np.repeat(settings, m, axis=0)])  # NAMES order
     targets = list(dict.fromkeys([*bounds, quality["target"]]))
     frame = grids.evaluate(model, pd.DataFrame(X, columns=list(NAMES)), targets, support)
-    ratio = np.max([frame[f"{t}_model_sd"] / np.maximum(frame[f"{t}_noise_sd"], 1e-300) for t in targets], axis=0)
+    ratio = np.max([frame[f"{t}_sd_ratio"] for t in targets], axis=0)
     per_block = max(1, BLOCK_POINTS // m)
     prob = np.empty(len(settings))
     for b, start in enumerate(range(0, len(settings), per_block)):

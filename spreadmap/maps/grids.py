@@ -38,18 +38,24 @@ def grid_frame(**columns) -> pd.DataFrame:
 
 
 def evaluate(model, frame: pd.DataFrame, targets, support: dict) -> pd.DataFrame:
-    """``frame`` with, per target, ``<t>``, ``<t>_model_sd``, ``<t>_run_sd``, ``<t>_noise_sd``; and
+    """``frame`` with, per target, ``<t>``, ``<t>_model_sd``, ``<t>_run_sd``, ``<t>_noise_sd``,
+    ``<t>_sd_ratio`` (the model's own SD over the noise SD, before any preset correction); and
     ``data_distance`` and ``supported`` (see the module docstring)."""
     X = frame[list(NAMES)].to_numpy(float)
     out = frame.copy()
     stats = model.predict_stats(X)
+    # whether the data support a point is the model's own knowledge against its cases' noise: a
+    # preset-to-reference factor (spreadmap.surrogate.correction) widens every SD alike and is not data
+    own = model.predict_stats(X, corrected=False) if getattr(model, "correction", None) is not None else stats
     ok = model.data_distance(X) <= float(support["max_distance"])
     out["data_distance"] = model.data_distance(X)
     for t in targets:
         mean, msd, rsd = stats[t]
         noise = np.sqrt(np.clip(rsd**2 - msd**2, 0, None))
         out[t], out[f"{t}_model_sd"], out[f"{t}_run_sd"], out[f"{t}_noise_sd"] = mean, msd, rsd, noise
-        ok &= msd <= float(support["max_sd_ratio"]) * noise
+        _, own_msd, own_rsd = own[t]
+        out[f"{t}_sd_ratio"] = own_msd / np.maximum(np.sqrt(np.clip(own_rsd**2 - own_msd**2, 0, None)), 1e-300)
+        ok &= out[f"{t}_sd_ratio"].to_numpy() <= float(support["max_sd_ratio"])
     out["supported"] = ok
     return out
 

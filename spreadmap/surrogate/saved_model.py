@@ -69,11 +69,11 @@ class SurrogateModel:
         return (X < self.design_low) | (X > self.design_high)
 
     # ---- predictions --------------------------------------------------------------------------
-    def predict_stats(self, X) -> dict:
-        """target -> (mean, model SD, SD of a new DEM run) at X (n, 4); with a ``correction``, as the
-        finer preset would read them (spreadmap.surrogate.correction)."""
+    def predict_stats(self, X, corrected: bool = True) -> dict:
+        """target -> (mean, model SD, SD of a new DEM run) at X (n, 4); with a ``correction`` (and
+        ``corrected``), as the finer preset would read them (spreadmap.surrogate.correction)."""
         out = {t: self.models[t].predictive(np.asarray(X, float)) for t in self.targets}
-        if self.correction is not None:
+        if corrected and self.correction is not None:
             out = {t: self.correction.stats(t, *v) for t, v in out.items()}
         return out
 
