@@ -6,7 +6,7 @@ progress.csv, converge/stopped.json (or, while the loop runs, its last
 converge/steps/step_*.json), convergence/summary.json,
 surrogate/surrogate_metrics.csv, surrogate/surrogate_r2_vs_neurons.csv,
 maps/sensitivity_ranking_table.csv, surrogate/model.joblib (the trends), heldout/score.json and
-heldout/score.csv (the held-out check: scripts/heldout.py score) and the cases tables (the
+heldout/score.csv (the held-out check: tools/heldout.py score) and the cases tables (the
 regimes, the flagged cases).
 """
 from __future__ import annotations

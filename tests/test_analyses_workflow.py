@@ -139,7 +139,7 @@ def test_the_study_publishes_and_answers_from_a_finished_run(finished_run, tmp_p
         assert list(ours["case_id"]) == list(theirs["case_id"]), name
         assert list(ours["mfr"]) == list(theirs["mfr"]), name
     text = (out / "summary.md").read_text()
-    # every question answered but the held-out check (scripts/heldout.py), which this run has not had
+    # every question answered but the held-out check (tools/heldout.py), which this run has not had
     heldout = "## The held-out check (points no sweep ran, predicted before they ran)\n" + NOT_YET
     assert heldout in text and text.count(NOT_YET) == 1, text
     assert "- lds: 12 of 12 cases finished" in text and "- lattice: 16 of 16 cases finished" in text

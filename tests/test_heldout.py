@@ -115,7 +115,7 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
     ran = tmp_path / "ran.csv"
     train.to_csv(ran, index=False)
     points, predictions = tmp_path / "points.csv", tmp_path / "pred.csv"
-    script = [sys.executable, str(ROOT / "scripts" / "heldout.py")]
+    script = [sys.executable, str(ROOT / "tools" / "heldout.py")]
     r = subprocess.run([*script, "choose", "--model", str(model), "--ran", str(ran), "--points", str(points),
                         "--predictions", str(predictions), "--min-distance", "0.1"],
                        capture_output=True, text=True, timeout=300)

@@ -42,7 +42,7 @@ COPIES = {  # source under the workflow directory -> destination under --out
     "results/surrogate": "surrogate",
     "results/maps": "maps",
     "results/tables/points.csv": "cases_heldout.csv",
-    "heldout": "heldout",  # scripts/heldout.py's points, predictions (made before the runs) and score
+    "heldout": "heldout",  # tools/heldout.py's points, predictions (made before the runs) and score
 }
 
 

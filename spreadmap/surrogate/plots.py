@@ -6,7 +6,7 @@
 * ``plot_study``: the study's protocol (held-out R^2 against neurons, min-max over the seeds)
   beside the cross-validated R^2 of the noise-aware models and the ceiling R^2_max.
 * ``plot_learning_curve``: cross-validated RMSE against the number of LDS cases, with the noise SD.
-* ``plot_heldout``: held-out checks (scripts/heldout.py score): each point's seed mean against
+* ``plot_heldout``: held-out checks (tools/heldout.py score): each point's seed mean against
   the prediction made before its runs, with the interval it was scored against, one panel per
   target, one marker per check; and every point's z with its RMS per target and check.
 """
@@ -135,7 +135,7 @@ def plot_all(result, outdir, prefix: str = "surrogate", floor: str | None = None
 
 
 def plot_heldout(scores: dict[str, pd.DataFrame], stem, level: float = 0.95) -> dict:
-    """scores: check label -> its score table (scripts/heldout.py score's CSV: name, target,
+    """scores: check label -> its score table (tools/heldout.py score's CSV: name, target,
     predicted, seed_mean, n_runs, sd_of_mean, z, inside; scored at `level`). Each point is drawn
     at (prediction, seed mean) over a vertical bar, the `level` interval of its seed mean about the
     prediction (centred on the y = x line), so a point is inside when its marker lies on its bar;

@@ -2,15 +2,15 @@
 """The held-out check of a study (spreadmap.surrogate.heldout), in two steps with the runs between:
 
     # 1. before any run: choose the points away from every case run, predict them, write both
-    python scripts/heldout.py choose --model results/surrogate/model.joblib \\
+    python tools/heldout.py choose --model results/surrogate/model.joblib \\
         --ran results/converge/table.csv results/tables/lds.csv --n 12 --seeds 1 2 3 4 \\
         --points heldout_points.csv --predictions heldout_predictions.csv
     # 2. run them: config `points: {csv: heldout_points.csv}`, then `snakemake points`
     # 3. score the runs against the intervals stated in step 1
-    python scripts/heldout.py score --points heldout_points.csv --predictions heldout_predictions.csv \\
+    python tools/heldout.py score --points heldout_points.csv --predictions heldout_predictions.csv \\
         --table results/tables/points.csv --targets mfr pd --out heldout_score.csv
     # 4. draw one or more scored checks
-    python scripts/heldout.py plot --scores heldout_score.csv --labels "first check" --out heldout
+    python tools/heldout.py plot --scores heldout_score.csv --labels "first check" --out heldout
 
 Commit the predictions before the runs: they are the claim the runs test. Errors in the input
 exit with status 2 and a one-line message.
@@ -108,7 +108,7 @@ def main(argv=None) -> int:
     s.add_argument("--level", type=float, default=0.95)
     s.add_argument("--out", help="per point and target (CSV); the summary beside it (.json)")
     f = sub.add_parser("plot", help="draw scored checks: seed means against the predictions, with their intervals")
-    f.add_argument("--scores", nargs="+", required=True, help="score CSVs (scripts/heldout.py score --out)")
+    f.add_argument("--scores", nargs="+", required=True, help="score CSVs (tools/heldout.py score --out)")
     f.add_argument("--labels", nargs="+", required=True, help="one label per score CSV")
     f.add_argument("--out", required=True, help="figure stem (writes .png, .pdf, .csv)")
     args = ap.parse_args(argv)
