@@ -19,6 +19,7 @@ from spreadmap.scene import UnsafeTimeStep
 from spreadmap.study_cases import loop_labels, planned_cases
 from spreadmap.substrate import floor_label
 from spreadmap.surrogate.correction import Correction, uncorrected_label
+from spreadmap.surrogate.correction import applies as correction_applies
 
 try:
     spreadmap_config.validate(config)
@@ -37,7 +38,8 @@ FLOOR = floor_label(config)  # the floor the cases are spread on, named on every
 # what the map model's numbers are: the floor, and the preset's step to `reference` when config
 # `fidelity_correction` gives one (spreadmap.surrogate.correction); named on every map and decision
 _CORRECTION = Correction.from_config(config)
-MAP_BASIS = FLOOR + "; " + (_CORRECTION.label() if _CORRECTION else uncorrected_label(config["preset"]))
+MAP_BASIS = FLOOR + "; " + (_CORRECTION.label() if _CORRECTION else
+                             uncorrected_label(config["preset"], why=correction_applies(config)))
 
 
 def add_case(point, preset=None, seed=None):

@@ -21,6 +21,7 @@ rule surrogate:
         floor=FLOOR,
         correction=config.get("fidelity_correction"),
         preset=config["preset"],
+        floor_kind=config["scene"].get("substrate", {}).get("kind", "flat"),
     log:
         "logs/surrogate.log",
     localrule: True

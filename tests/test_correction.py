@@ -3,6 +3,7 @@ moments against Monte Carlo draws, the saved model's predictions and draws, the 
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ import synthetic_cases as syn
 from spreadmap.surrogate import fitting, saved_model
 from spreadmap.surrogate.correction import Correction, uncorrected_label
 
+ROOT = Path(__file__).resolve().parents[1]
 QUICK = {"cv_repeats": 1, "cv_folds": 3, "gp_restarts": 0, "learning_curve": False, "mlp_sizes": [4], "mlp_alphas": [1.0],
          "ensemble_members": 4, "neurons": [2], "seeds": [0]}
 SECTION = {"preset": "default", "reference": "reference",
@@ -68,8 +70,8 @@ def test_saved_and_loaded_model_keeps_its_correction(model, tmp_path):
 def test_config_and_labels():
     assert Correction.from_config({}) is None and Correction.from_config({"fidelity_correction": None}) is None
     corr = Correction.from_config({"fidelity_correction": SECTION})
-    assert corr.label(("mfr", "pd", "coverage")) == ("`default` corrected to `reference`: MFR x1.040 (SE 0.012), "
-                                                    "PD x1.020 (SE 0.010); coverage as `default` reads")
+    assert corr.label(("mfr", "pd", "coverage")) == ("`default` corrected to `reference`: MFR x1.040 (SD 0.012), "
+                                                    "PD x1.020 (SD 0.010); coverage as `default` reads")
     with pytest.raises(ValueError, match="fidelity_correction.targets.mfr"):
         Correction.from_config({"fidelity_correction": {"targets": {"mfr": {"factor": -1, "sd": 0.1}}}})
     assert uncorrected_label("default") == "`default` preset, not corrected to `reference`"
@@ -91,3 +93,22 @@ def test_maps_support_is_the_models_own_not_the_factors(model):
     m, s = plain["mfr"].to_numpy(), plain["mfr_model_sd"].to_numpy()
     assert got["mfr_model_sd"].to_numpy() == pytest.approx(np.sqrt(1.05**2 * s**2 + (m**2 + s**2) * 0.2**2))
     assert (got["mfr_model_sd"] > got["mfr_noise_sd"]).any()  # wider than one run's noise, still supported
+
+
+def test_a_factor_of_another_floor_or_preset_does_not_apply():
+    """The shipped factor is for `default` on the rough floor: a run on the flat floor or at another
+    preset reads as its preset does, and its maps say why."""
+    from spreadmap import config as spreadmap_config
+    from spreadmap.surrogate.correction import applies
+
+    cfg = spreadmap_config.load(ROOT / "config.yaml")
+    assert cfg["fidelity_correction"]["floor"] == cfg["scene"]["substrate"]["kind"] == "rough"
+    assert Correction.from_config(cfg) is not None and applies(cfg) is None
+    cfg["scene"]["substrate"]["kind"] = "flat"
+    spreadmap_config.validate(cfg)
+    assert Correction.from_config(cfg) is None and applies(cfg) == "its factors were measured on the rough floor"
+    cfg["scene"]["substrate"]["kind"] = "rough"
+    cfg["preset"] = "fast"
+    assert Correction.from_config(cfg) is None
+    assert uncorrected_label("fast", why=applies(cfg)) == ("`fast` preset, not corrected to `reference` "
+                                                          "(its factors are for `default`)")

@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 from spreadmap.config import load  # noqa: E402
 from spreadmap.fidelity.correction import config_block, correction, pairs  # noqa: E402
 from spreadmap.fidelity.plots import correction_figure  # noqa: E402
-from spreadmap.substrate import floor_label  # noqa: E402
+from spreadmap.substrate import floor_label, floor_of  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -47,10 +47,11 @@ def main(argv=None) -> int:
     p = pairs(table, args.preset, args.reference)
     args.out.mkdir(parents=True, exist_ok=True)
     p.to_csv(args.out / "pairs.csv", index=False)
-    floor = floor_label(load(args.config))
+    study_config = load(args.config)
+    floor = floor_label(study_config)
     correction_figure(result, p, args.out / "correction", floor)
     source = args.source or str(args.out.relative_to(ROOT) if args.out.is_relative_to(ROOT) else args.out)
-    block = config_block(result, source)
+    block = config_block(result, source, floor_of(study_config)[0])
     (args.out / "correction.json").write_text(json.dumps({**result, "floor": floor, "config_block": block},
                                                          indent=1, default=float) + "\n")
     print(yaml.safe_dump({"fidelity_correction": block}, sort_keys=False))

@@ -123,7 +123,7 @@ def correction(table: pd.DataFrame, preset: str = "default", reference: str = "r
     return out
 
 
-def config_block(result: dict, source: str) -> dict:
-    """The `fidelity_correction` config section of a result."""
-    return {"preset": result["preset"], "reference": result["reference"], "source": source,
+def config_block(result: dict, source: str, floor: str | None = None) -> dict:
+    """The `fidelity_correction` config section of a result (``floor``: scene.substrate.kind of its cases)."""
+    return {"preset": result["preset"], "reference": result["reference"], **({"floor": floor} if floor else {}), "source": source,
             "targets": {t: {"factor": round(v["factor"], 4), "sd": round(v["sd"], 4)} for t, v in result["targets"].items()}}

@@ -2,7 +2,8 @@
 
 The main job runs the `default` preset; the fidelity study measures, at paired points and packing
 seeds, what `reference` reads against it (spreadmap.fidelity.correction, docs/fidelity/correction).
-Where config `fidelity_correction` gives a target a factor k with a standard error s_k, the saved map
+Where config `fidelity_correction` gives a target a factor k with an SD s_k (its error at a point the
+fidelity study did not run: spreadmap.fidelity.correction), the saved map
 model reports that target as `reference` would read it:
 
     mean' = k mean,    model SD' = sqrt(k^2 model SD^2 + mean^2 s_k^2 + model SD^2 s_k^2),
@@ -32,8 +33,10 @@ class Correction:
 
     @classmethod
     def from_config(cls, config: dict | None) -> "Correction | None":
+        """The config's factors, or None without any, or when they were measured for another preset
+        or floor than the config runs (``applies``: then the maps read as their preset does)."""
         section = (config or {}).get("fidelity_correction")
-        if not section:
+        if not section or applies(config) is not None:
             return None
         factors = {t: (float(v["factor"]), float(v["sd"])) for t, v in section.get("targets", {}).items()}
         for t, (k, s) in factors.items():
@@ -59,8 +62,8 @@ class Correction:
         return draws * rng.normal(k, s, size=(len(draws), 1))
 
     def label(self, targets=("mfr", "pd")) -> str:
-        """One line for a map: what the means are, e.g. "`default` corrected to `reference`: MFR x1.031 (SE 0.010)"."""
-        parts = [f"{t.upper() if t in ('mfr', 'pd') else t} x{k:.3f} (SE {s:.3f})" for t, (k, s) in self.factors.items()]
+        """One line for a map: what the means are, e.g. "`default` corrected to `reference`: MFR x1.031 (SD 0.010)"."""
+        parts = [f"{t.upper() if t in ('mfr', 'pd') else t} x{k:.3f} (SD {s:.3f})" for t, (k, s) in self.factors.items()]
         rest = [t for t in targets if t not in self.factors]
         text = f"`{self.preset}` corrected to `{self.reference}`: " + ", ".join(parts)
         if rest:
@@ -68,5 +71,19 @@ class Correction:
         return text
 
 
-def uncorrected_label(preset: str, reference: str = "reference") -> str:
-    return f"`{preset}` preset, not corrected to `{reference}`"
+def applies(config: dict | None) -> str | None:
+    """Why the config's `fidelity_correction` does not apply to the run it configures (measured for
+    another preset or floor), or None when it applies or there is none."""
+    config = config or {}
+    section = config.get("fidelity_correction") or {}
+    if section.get("preset") not in (None, config.get("preset", section.get("preset"))):
+        return f"its factors are for `{section['preset']}`"
+    if "scene" in config:
+        floor = ((config.get("scene") or {}).get("substrate") or {}).get("kind", "flat")  # the schema's default
+        if section.get("floor") not in (None, floor):
+            return f"its factors were measured on the {section['floor']} floor"
+    return None
+
+
+def uncorrected_label(preset: str, reference: str = "reference", why: str | None = None) -> str:
+    return f"`{preset}` preset, not corrected to `{reference}`" + (f" ({why})" if why else "")
