@@ -38,8 +38,8 @@ FLOOR = floor_label(config)  # the floor the cases are spread on, named on every
 # what the map model's numbers are: the floor, and the preset's step to `reference` when config
 # `fidelity_correction` gives one (spreadmap.surrogate.correction); named on every map and decision
 _CORRECTION = Correction.from_config(config)
-MAP_BASIS = FLOOR + "; " + (_CORRECTION.label() if _CORRECTION else
-                             uncorrected_label(config["preset"], why=correction_applies(config)))
+_BASIS = _CORRECTION.label() if _CORRECTION else uncorrected_label(config["preset"], why=correction_applies(config))
+MAP_BASIS = f"{FLOOR}; {_BASIS}"
 
 
 def add_case(point, preset=None, seed=None):
