@@ -19,9 +19,7 @@ rule surrogate:
         noise_model=config.get("noise_model"),
         counting_c=config.get("metrics", {}).get("counting_noise_c", 0.37),
         floor=FLOOR,
-        correction=config.get("fidelity_correction"),
-        preset=config["preset"],
-        floor_kind=config["scene"].get("substrate", {}).get("kind", "flat"),
+        correction=config.get("fidelity_correction") if _CORRECTION else None,  # None where it does not apply
     log:
         "logs/surrogate.log",
     localrule: True

@@ -19,8 +19,8 @@ table = case_noise(read_table(sm.input.table), sm.params.noise_model, sm.params.
 result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table, ranges=sm.params.ranges)
 # the map model's numbers as `reference` would read them, where config fidelity_correction gives a
 # factor (the validation above and its figures stay against the cases' own preset)
-correction = Correction.from_config({"fidelity_correction": sm.params.correction, "preset": sm.params.preset,
-                                     "scene": {"substrate": {"kind": sm.params.floor_kind}}})
+# (the rule passes it only where it applies to this run's preset and floor: rules/common.smk)
+correction = Correction.from_config({"fidelity_correction": sm.params.correction})
 if correction is not None:
     result.model.correction = correction
     result.model.metadata["fidelity_correction"] = {"label": correction.label(result.model.targets),

@@ -43,12 +43,13 @@ def evaluate(model, frame: pd.DataFrame, targets, support: dict) -> pd.DataFrame
     ``data_distance`` and ``supported`` (see the module docstring)."""
     X = frame[list(NAMES)].to_numpy(float)
     out = frame.copy()
-    stats = model.predict_stats(X)
     # whether the data support a point is the model's own knowledge against its cases' noise: a
     # preset-to-reference factor (spreadmap.surrogate.correction) widens every SD alike and is not data
-    own = model.predict_stats(X, corrected=False) if getattr(model, "correction", None) is not None else stats
-    ok = model.data_distance(X) <= float(support["max_distance"])
+    correction = getattr(model, "correction", None)
+    own = model.predict_stats(X, corrected=False) if correction is not None else model.predict_stats(X)
+    stats = {t: correction.stats(t, *v) for t, v in own.items()} if correction is not None else own
     out["data_distance"] = model.data_distance(X)
+    ok = out["data_distance"].to_numpy() <= float(support["max_distance"])
     for t in targets:
         mean, msd, rsd = stats[t]
         noise = np.sqrt(np.clip(rsd**2 - msd**2, 0, None))

@@ -45,6 +45,10 @@ class Correction:
         preset = section.get("preset") or (config or {}).get("preset", "default")
         return cls(factors, str(preset), str(section.get("reference", "reference")), str(section.get("source", "")))
 
+    def scale(self, target: str, mean):
+        """`target`'s mean after its factor (unchanged without one)."""
+        return mean * self.factors[target][0] if target in self.factors else mean
+
     def stats(self, target: str, mean, model_sd, run_sd):
         """(mean, model SD, run SD) of `target` after its factor; unchanged without one."""
         if target not in self.factors:

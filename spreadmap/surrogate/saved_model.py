@@ -93,7 +93,7 @@ class SurrogateModel:
         X = np.asarray(points, float)
         means = [self.models[t].latent(X)[0] for t in ("mfr", "pd")]
         if self.correction is not None:
-            means = [self.correction.stats(t, m, 0.0 * m, 0.0 * m)[0] for t, m in zip(("mfr", "pd"), means)]
+            means = [self.correction.scale(t, m) for t, m in zip(("mfr", "pd"), means)]
         return np.column_stack(means)
 
 
