@@ -170,10 +170,11 @@ cx, span = 0.5 * (x_lo + x_hi), 0.5 * (x_hi - x_lo)
 # never interact, and no potential interaction between them costs a step. Blade and walls: 1.
 POWDER_MASK, SUBSTRATE_MASK, AVOID_MASK = 3, 6, 4
 floor_top = -d if P["substrate"] == "rough" else 0.0   # under a rough substrate, a backstop
-O.bodies.append(utils.box((cx, 0.5 * W, floor_top - d), (span, 0.5 * W + 2 * d, d), fixed=True, material=frict,
-                          mask=SUBSTRATE_MASK if P["substrate"] == "rough" else 1))
+# box_ids: the boxes a sphere can press (these, the settle's temporary walls, the blade)
+box_ids = [O.bodies.append(utils.box((cx, 0.5 * W, floor_top - d), (span, 0.5 * W + 2 * d, d), fixed=True, material=frict,
+                                     mask=SUBSTRATE_MASK if P["substrate"] == "rough" else 1))]
 for yc in (-d, W + d):
-    O.bodies.append(utils.box((cx, yc, 0.5 * z_hi), (span, d, 0.5 * z_hi + d), fixed=True, material=smooth))
+    box_ids.append(O.bodies.append(utils.box((cx, yc, 0.5 * z_hi), (span, d, 0.5 * z_hi + d), fixed=True, material=smooth)))
 # A rough substrate (the previous layer): fixed spheres of the powder's diameter on a hexagonal
 # lattice (seeded offset, rows along x), each lowered by a seeded random depth in
 # [0, substrate_jitter x R], so that their highest points lie in [-jitter R, 0]: z = 0 is the top of
@@ -229,6 +230,7 @@ temporary_walls = [
                               fixed=True, material=smooth))
     for xc in (-d, L + d)
 ]
+box_ids += temporary_walls
 
 cloud = pack.SpherePack()
 placed = cloud.makeCloud((0, 0, 0), (L, W, P["cloud_height"]), rMean=R, rRelFuzz=0.0,
@@ -370,13 +372,24 @@ def monitor():
         state["behind_series"].append([O.time, x, volume_behind(x)])
 
 
+def box_overlap():
+    """The largest overlap / R of a sphere against a box: the floor, the side walls, the settle's
+    temporary walls, the blade (their contacts only: a few hundred at most, read in Python)."""
+    best = 0.0
+    for bid in box_ids:
+        for i in O.bodies[bid].intrs():
+            if i.isReal and i.geom.penetrationDepth > best:
+                best = i.geom.penetrationDepth
+    return best / R
+
+
 def record_overlap():
-    """The peak sphere-sphere overlap / R (YADE's C++ maxOverlapRatio: u_N over the reduced radius
-    2 r1 r2 / (r1 + r2), = R for equal spheres), every overlap_every steps: a step short against the
-    shortest impact (the renderer sets it from Hertz's contact duration at the fastest expected
-    impact), so no impact's peak is missed. Contacts with boxes (flat floor, blade, walls) are
-    checked by monitor() only."""
-    overlap = yade._utils.maxOverlapRatio()
+    """The peak overlap / R every overlap_every steps, of sphere-sphere contacts (YADE's C++
+    maxOverlapRatio: u_N over the reduced radius 2 r1 r2 / (r1 + r2), = R for equal spheres) and of
+    sphere-box contacts (box_overlap: the floor, walls and blade, u_N over the sphere's radius) alike:
+    a step short against the shortest impact (the renderer sets it from Hertz's contact duration at
+    the fastest expected impact), so no impact's peak is missed, on a sphere or on a box."""
+    overlap = max(yade._utils.maxOverlapRatio(), box_overlap())
     if overlap > state["peak_overlap_ratio"]:
         state["peak_overlap_ratio"] = overlap
     by_phase = state["peak_overlap_by_phase"]
@@ -583,12 +596,14 @@ def control():
             newton.damping = 0.0
             for wid in temporary_walls:
                 O.bodies.erase(wid)
+                box_ids.remove(wid)
             top = max(b.state.pos[2] for b in spheres()) + R
             state["settled_top"] = top
             z_top = top + 10.0 * d
             state["blade"] = O.bodies.append(utils.box(
                 (-0.5 * tb, 0.5 * W, 0.5 * (h + z_top)), (0.5 * tb, 0.5 * W + d, 0.5 * (z_top - h)),
                 fixed=True, material=frict))
+            box_ids.append(state["blade"])
             start_phase("relax")
     elif phase == "relax":
         if (elapsed > 0.1 * P["relax_max_time"] and kinetic_energy_settled()) or elapsed > P["relax_max_time"]:
