@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from spreadmap.maps.floors import box_sample, by_band, compare, ratio_quantile
+from spreadmap.maps.floors import box_sample, by_band, compare, piles_by_band, ratio_quantile
 
 
 def test_ratio_quantile_with_exact_denominator_is_the_normal_quantile_scaled():
@@ -74,3 +74,27 @@ def test_box_sample_fills_the_box():
     for col, lo, hi in (("f", 0.15, 0.45), ("v_mm_s", 5, 15)):
         counts = np.histogram(box[col], bins=np.linspace(lo, hi, 5))[0]
         assert counts.tolist() == [64, 64, 64, 64]
+
+
+def test_piles_by_band_tells_a_drained_pile_from_an_unsteady_flow():
+    """Hand-made sweep: per h/d band the counts, the flags split by the heap left at the window's
+    end against the bound (a missing heap counts as ran down), and the rolled-off statistics."""
+    rows = [  # d_um, h_um, status, flagged, heap_end_h2, rolled off, spheres, mfr
+        (50, 55, "ok", True, 0.3, 150, 300, 0.05),     # h/d 1.1: ran down
+        (50, 60, "ok", True, 3.5, 100, 400, 0.08),     # h/d 1.2: unsteady with the heap full
+        (50, 65, "ok", False, 3.4, 20, 400, 0.10),     # h/d 1.3
+        (40, 70, "ok", True, float("nan"), 10, 500, 0.2),  # h/d 1.75: no heap measured: ran down
+        (40, 70, "failed", False, float("nan"), 0, 500, float("nan")),
+        (10, 75, "ok", False, 2.2, 272, 4000, 0.5),    # h/d 7.5
+    ]
+    cases = pd.DataFrame(rows, columns=["d_um", "h_um", "status", "flagged", "heap_end_h2", "rolled_off_particles",
+                                        "n_particles", "mfr"])
+    t = piles_by_band(cases, 0.7, edges=(1.0, 1.5, 2.0, 8.0)).set_index("h_over_d_from")
+    counts = ["cases", "finished", "flagged", "flagged_ran_down", "flagged_unsteady_heap_full"]
+    assert t.loc[1.0, counts].tolist() == [3, 3, 2, 1, 1]
+    assert t.loc[1.0, "rolled_off_median"] == 100 and t.loc[1.0, "rolled_off_max"] == 150
+    assert t.loc[1.0, "rolled_off_share_median"] == 0.25  # 150/300, 100/400, 20/400
+    assert t.loc[1.0, "heap_end_h2_min"] == 0.3 and t.loc[1.0, "mfr_median"] == 0.10  # the one usable case
+    assert t.loc[1.5, ["cases", "finished", "flagged", "flagged_ran_down"]].tolist() == [2, 1, 1, 1]
+    assert np.isnan(t.loc[1.5, "mfr_median"])
+    assert t.loc[2.0, ["cases", "flagged", "rolled_off_max", "heap_end_h2_median"]].tolist() == [1, 0, 272, 2.2]

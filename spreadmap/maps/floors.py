@@ -88,3 +88,32 @@ def by_band(table: pd.DataFrame, target: str, edges=(1.0, 1.5, 2.0, 3.0, 5.0, 8.
                      if len(ok) else np.nan,
                      "diff_median": float(part[f"{target}_diff"].median()) if len(part) else np.nan})
     return pd.DataFrame(rows)
+
+
+def piles_by_band(cases: pd.DataFrame, min_heap_h2: float, edges=(1.0, 1.5, 2.0, 3.0, 5.0, 8.0)) -> pd.DataFrame:
+    """A floor's sweep read for drained piles, per h/d band (issue 36): cases, finished, flagged; of
+    the flagged, those whose pile ran down (less than `min_heap_h2` h^2 ahead of the blade at the
+    window's end, or no heap measured) and those whose flow was unsteady with the heap full; spheres
+    rolled off the floor's ends (median, max, median share of the case's spheres); the heap at the
+    window's end in h^2 (min, median); median MFR of the usable cases. Rows of every band, empty
+    ones with zero cases."""
+    hd = cases["h_um"] / cases["d_um"]
+    rows = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        part = cases[(hd >= lo) & (hd < hi)]
+        ok = part[part["status"] == "ok"]
+        flagged = ok[ok["flagged"].astype(bool)]
+        heap = ok["heap_end_h2"]
+        ran_down = flagged["heap_end_h2"].isna() | (flagged["heap_end_h2"] < min_heap_h2)
+        usable = ok[~ok["flagged"].astype(bool)]
+        rolled = ok["rolled_off_particles"]
+        rows.append({"h_over_d_from": lo, "h_over_d_below": hi, "cases": len(part), "finished": len(ok),
+                     "flagged": len(flagged), "flagged_ran_down": int(ran_down.sum()),
+                     "flagged_unsteady_heap_full": int((~ran_down).sum()),
+                     "rolled_off_median": float(rolled.median()) if len(ok) else np.nan,
+                     "rolled_off_max": float(rolled.max()) if len(ok) else np.nan,
+                     "rolled_off_share_median": float((rolled / ok["n_particles"]).median()) if len(ok) else np.nan,
+                     "heap_end_h2_min": float(heap.min()) if len(ok) else np.nan,
+                     "heap_end_h2_median": float(heap.median()) if len(ok) else np.nan,
+                     "mfr_median": float(usable["mfr"].median()) if len(usable) else np.nan})
+    return pd.DataFrame(rows)
