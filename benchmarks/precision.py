@@ -142,9 +142,9 @@ CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", 
 RENDER = r"""
 import json, sys
 from spreadmap import config as cfgmod
-from spreadmap.cases import rounded
-from spreadmap.render import render, template_sha256
-from spreadmap.scene import scene_parameters
+from spreadmap.case.identity import rounded
+from spreadmap.case.render import render, template_sha256
+from spreadmap.case.scene import scene_parameters
 job = json.loads(sys.argv[1])
 cfg = cfgmod.load(job["config"])
 def update(base, new):
@@ -192,7 +192,7 @@ def build_jobs(arms: list[str], points: list[str], seeds: list[int], base: Path)
 
 
 def run_job(job: dict) -> dict:
-    from spreadmap.launcher import run_case
+    from spreadmap.case.launcher import run_case
 
     case_dir = Path(job["case_dir"])
     case_dir.mkdir(parents=True, exist_ok=True)

@@ -8,7 +8,7 @@ and its benchmark (wall time, peak memory). A restored case gets back its metric
 benchmark.tsv, plus restored.json saying where they came from; its raw YADE record is not
 published and stays missing, so the workflow (rules/common.smk, `case_raw_input`) does not ask for
 it. A row is restored under its own case id, which carries the content key of the scene it was run
-with (spreadmap.cases): the workflow re-uses it only when its own configuration and template give
+with (spreadmap.case.identity): the workflow re-uses it only when its own configuration and template give
 the same key, so a published case is never taken for a case of another material or scene. A table
 whose ids have no content key (published before issue 35) does not say which scene its cases were
 run with: it is refused, naming the table, before anything is restored. A case directory that
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from .cases import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, readable_id
+from .case.identity import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, readable_id
 from .checksums import sha256, verified_bytes
 from .files import write_text_atomically
 from .loop.stepper import step_number
@@ -50,7 +50,7 @@ class UnkeyedTableError(ValueError):
 
 
 def check_case_ids(table: pd.DataFrame, table_path) -> None:
-    """Refuse a table unless every row's case id is a content id (spreadmap.cases.CASE_ID_PATTERN)
+    """Refuse a table unless every row's case id is a content id (spreadmap.case.identity.CASE_ID_PATTERN)
     naming the row's own preset, design point and seed."""
     ids = table["case_id"].astype(str)
     legacy = ids.str.fullmatch(LEGACY_CASE_ID_PATTERN)

@@ -19,9 +19,9 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
+from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
 from spreadmap.loop.stepper import step_number
-from spreadmap.substrate import floor_label
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
 

@@ -19,7 +19,7 @@ import yaml
 from conftest import ROOT, keyed_table, make_workflow, planned_jobs, snakemake, study_config
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import readable_part
+from spreadmap.case.identity import readable_part
 from spreadmap.checksums import write_manifest
 from spreadmap.restore import UnkeyedTableError, restore_cases, restore_steps
 from spreadmap.table import build_table

@@ -10,7 +10,7 @@ import pytest
 from conftest import ROOT, make_workflow, snakemake
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import case_id, readable_id, readable_part
+from spreadmap.case.identity import case_id, readable_id, readable_part
 from spreadmap.design import NAMES
 from spreadmap.study_cases import cpu_hours_to_go, finished_table, planned_cases, planned_sweeps, progress
 from spreadmap.table import usable
@@ -92,9 +92,9 @@ def test_cpu_to_go_is_the_plans_cost_at_this_machines_speed(config):
     CPU to go is the law's sum over the other 33 (computed here from the scene's planned spheres
     and steps and the law's formula) times the factor, within the scatter's median error; with
     no case finished, the law uncalibrated."""
+    from spreadmap.case.scene import scene_parameters
     from spreadmap.design import NAMES
     from spreadmap.loop.cost import DEFAULT_LAW
-    from spreadmap.scene import scene_parameters
 
     cfg = copy.deepcopy(config)
     cfg["sweeps"] = {"lds": {"seed": 42, "partitions": [81]}, "lattice": {"k": [3]}}
@@ -298,7 +298,7 @@ def test_publishing_names_cases_by_the_workflow_directorys_own_template(tmp_path
     import subprocess
     import sys
 
-    from spreadmap.render import template_sha256
+    from spreadmap.case.render import template_sha256
 
     wf = make_workflow(tmp_path, {"sweeps": {"lds": {"seed": 42, "partitions": [3]}}})
     template = wf / "yade_scripts" / "spreading_case.py"
