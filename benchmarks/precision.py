@@ -142,9 +142,14 @@ CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", 
 RENDER = r"""
 import json, sys
 from spreadmap import config as cfgmod
-from spreadmap.case.identity import rounded
-from spreadmap.case.render import render, template_sha256
-from spreadmap.case.scene import scene_parameters
+try:
+    from spreadmap.case.identity import rounded
+    from spreadmap.case.render import render, template_sha256
+    from spreadmap.case.scene import scene_parameters
+except ImportError:  # an arm's older tree (`rev`), from before spreadmap/case/ (issue 34)
+    from spreadmap.cases import rounded
+    from spreadmap.render import render, template_sha256
+    from spreadmap.scene import scene_parameters
 job = json.loads(sys.argv[1])
 cfg = cfgmod.load(job["config"])
 def update(base, new):
