@@ -5,7 +5,7 @@ case beside its cost.
 
 The cases are the named design points of config.yaml ``fidelity.points`` (``--points`` picks some
 by name) at every preset of ``--presets`` and every packing seed of ``--seeds``, all in one run.
-Each case is rendered with spreadmap.render and run with spreadmap.launcher.run_case in a
+Each case is rendered with spreadmap.case.render and run with spreadmap.case.launcher.run_case in a
 directory of its own (a temporary one, removed afterwards, unless ``--keep DIR``), ``--workers``
 YADE processes at once, each single-threaded as in the workflow (one worker process per running
 case, so that the CPU time that run_case reads from the process's children is that case's alone).
@@ -52,8 +52,8 @@ CSV_COLUMNS = ["preset", "point", "seed", "case_id", "outcome", "status", "reaso
 
 def build_jobs(config: dict, points: list[str], presets: list[str], seeds: list[int], base: Path) -> list[dict]:
     """One job per (point, seed, preset), presets innermost: the interleaved order."""
-    from spreadmap.cases import case_scene
-    from spreadmap.render import template_sha256
+    from spreadmap.case.identity import case_scene
+    from spreadmap.case.render import template_sha256
 
     sha = template_sha256()
     jobs = []
@@ -70,9 +70,9 @@ def build_jobs(config: dict, points: list[str], presets: list[str], seeds: list[
 def run_job(job: dict) -> dict:
     """Render and run one case in its directory (in a worker process); returns the launcher result
     and the raw record ({} when YADE wrote none)."""
+    from spreadmap.case.launcher import run_case
+    from spreadmap.case.render import render
     from spreadmap.files import write_text_atomically
-    from spreadmap.launcher import run_case
-    from spreadmap.render import render
 
     workdir = Path(job["workdir"])
     workdir.mkdir(parents=True, exist_ok=True)

@@ -2,7 +2,7 @@
 """Where a sphere-step's CPU goes: YADE's per-engine timers (O.timingEnabled) in each phase of a
 case, at a costly corner of the design space beside cheaper points.
 
-Each case is the workflow's own scene (spreadmap.scene.scene_parameters, rendered from
+Each case is the workflow's own scene (spreadmap.case.scene.scene_parameters, rendered from
 yade_scripts/spreading_case.py) with `timing` on, stopped after ``--move-steps`` steps of the move
 phase (the settle and relax phases run whole), each YADE single-threaded, ``--workers`` at once.
 Prints per case and phase: steps, mean spheres, bodies, interactions and contacts at its end, the
@@ -36,9 +36,9 @@ POINTS = {
 
 
 def run_one(job: dict) -> dict:
+    from spreadmap.case.launcher import run_case
+    from spreadmap.case.render import render
     from spreadmap.files import write_text_atomically
-    from spreadmap.launcher import run_case
-    from spreadmap.render import render
 
     workdir = Path(job["workdir"])
     workdir.mkdir(parents=True, exist_ok=True)
@@ -78,9 +78,9 @@ def main(argv=None) -> int:
     parser.add_argument("--json", help="write the numbers here")
     args = parser.parse_args(argv)
 
+    from spreadmap.case.render import template_sha256
+    from spreadmap.case.scene import scene_parameters
     from spreadmap.config import load
-    from spreadmap.render import template_sha256
-    from spreadmap.scene import scene_parameters
 
     config = load(args.config)
     print("\n".join(description_lines()))

@@ -27,14 +27,14 @@ import pandas as pd  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.cases import repeat_group  # noqa: E402
+from spreadmap.case.identity import repeat_group  # noqa: E402
 from spreadmap.metrics import measure  # noqa: E402
 
 MEASURES = ("mfr", "pd", "layer_packing", "coverage", "roughness_d", "thickness_ratio")
 
 
 def point_of(path: Path, raw: dict) -> str:
-    """The design point of a case: what its seed repeats share (spreadmap.cases.repeat_group, from the
+    """The design point of a case: what its seed repeats share (spreadmap.case.identity.repeat_group, from the
     raw record's parameters), else its directory's name without the packing seed's `-s<n>` (and key)."""
     if isinstance(raw.get("params"), dict) and {"point", "preset", "seed"} <= set(raw["params"]):
         return repeat_group(raw["params"])

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from spreadmap.cases import repeat_group  # noqa: E402
+from spreadmap.case.identity import repeat_group  # noqa: E402
 
 PHASES = ("settle", "relax", "approach", "window")
 

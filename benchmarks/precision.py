@@ -49,7 +49,7 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from spreadmap.checksums import republish_if_listed, verified_bytes  # noqa: E402
+from spreadmap.study.checksums import republish_if_listed, verified_bytes  # noqa: E402
 
 POINTS = {  # f, d_um, h_um, v_mm_s: the four fidelity points, the two corners, two more
     "normal": (0.30, 30, 65, 10),
@@ -146,9 +146,14 @@ CSV_COLUMNS = ["arm", "point", "seed", "f", "d_um", "h_um", "v_mm_s", "status", 
 RENDER = r"""
 import json, sys
 from spreadmap import config as cfgmod
-from spreadmap.cases import rounded
-from spreadmap.render import render, template_sha256
-from spreadmap.scene import scene_parameters
+try:
+    from spreadmap.case.identity import rounded
+    from spreadmap.case.render import render, template_sha256
+    from spreadmap.case.scene import scene_parameters
+except ImportError:  # an arm's older tree (`rev`), from before spreadmap/case/ (issue 34)
+    from spreadmap.cases import rounded
+    from spreadmap.render import render, template_sha256
+    from spreadmap.scene import scene_parameters
 job = json.loads(sys.argv[1])
 cfg = cfgmod.load(job["config"])
 def update(base, new):
@@ -196,7 +201,7 @@ def build_jobs(arms: list[str], points: list[str], seeds: list[int], base: Path)
 
 
 def run_job(job: dict) -> dict:
-    from spreadmap.launcher import run_case
+    from spreadmap.case.launcher import run_case
 
     case_dir = Path(job["case_dir"])
     case_dir.mkdir(parents=True, exist_ok=True)

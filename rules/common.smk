@@ -2,22 +2,22 @@
 # Per-case values reach the jobs as params from this registry (never through a shared table file,
 # which would re-run every case whenever the table grows). A case is its content (every parameter the
 # YADE script receives: design point, preset values, material, scene, packing seed, template hash;
-# spreadmap.cases): the same content asked for by two sets is one case, run once, and two contents
+# spreadmap.case.identity): the same content asked for by two sets is one case, run once, and two contents
 # (two materials, two scene versions) are two cases side by side in results/cases/.
 import json
 import os
 import sys
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import CASE_ID_PATTERN, case_scene, rounded
+from spreadmap.case.identity import CASE_ID_PATTERN, case_scene, rounded
 from spreadmap.design import NAMES
 from spreadmap.fidelity.plan import knob_cases, knob_presets, preset_cases
 from spreadmap.sampling import chosen_points
-from spreadmap.render import template_sha256
-from spreadmap.migrate_cases import legacy_case_folders
-from spreadmap.scene import UnsafeTimeStep
-from spreadmap.study_cases import loop_labels, planned_cases
-from spreadmap.substrate import floor_label
+from spreadmap.case.render import template_sha256
+from spreadmap.case.migrate import legacy_case_folders
+from spreadmap.case.scene import UnsafeTimeStep
+from spreadmap.study.cases import loop_labels, planned_cases
+from spreadmap.case.substrate import floor_label
 from spreadmap.surrogate.correction import Correction, uncorrected_label
 from spreadmap.surrogate.correction import applies as correction_applies
 
@@ -165,7 +165,7 @@ def converge_final_step(wildcards):
 
 def converge_final_cases():
     """(case id, label in the converge table) of the whole converge run, in run order; the label
-    (spreadmap.study_cases.loop_labels) holds the batch each came in and whether it is an LDS case
+    (spreadmap.study.cases.loop_labels) holds the batch each came in and whether it is an LDS case
     (the start and each batch's LDS share) or an active one."""
     final = converge_final_step(None)
     n = int(final.rsplit("_", 1)[1].split(".")[0])

@@ -1,5 +1,5 @@
 """Snakemake entry: MFR, PD, layer quality, noise estimate, regime and diagnostics of one case from its raw YADE output."""
-from spreadmap.launcher import write_json_atomically
+from spreadmap.case.launcher import write_json_atomically
 from spreadmap.logs import log_to
 from spreadmap.metrics import case_metrics
 from spreadmap.records import read_raw

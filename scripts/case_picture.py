@@ -1,7 +1,7 @@
 """Snakemake entry: side and top views of one case at three moments."""
+from spreadmap.case.pictures import plot_case_views
 from spreadmap.logs import log_to
 from spreadmap.records import read_raw
-from spreadmap.trajectory import plot_case_views
 
 log_to(snakemake)  # noqa: F821
 

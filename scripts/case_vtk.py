@@ -1,7 +1,7 @@
 """Snakemake entry: legacy VTK files (ParaView) of one case's snapshots."""
+from spreadmap.case.vtk_export import export_case
 from spreadmap.logs import log_to
 from spreadmap.records import read_raw
-from spreadmap.vtk_export import export_case
 
 log_to(snakemake)  # noqa: F821
 

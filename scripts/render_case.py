@@ -1,7 +1,7 @@
 """Snakemake entry: write one case's YADE script (parameters embedded)."""
+from spreadmap.case.render import render
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
-from spreadmap.render import render
 
 log_to(snakemake)  # noqa: F821
 

@@ -8,7 +8,7 @@ so the case shows up in the table with its reason and never blocks the others.
 A finished simulation of the same parameters (simulated.json, beside the output) is re-used."""
 import sys
 
-from spreadmap.launcher import failure_record, retry_wanted, simulate, write_json_atomically
+from spreadmap.case.launcher import failure_record, retry_wanted, simulate, write_json_atomically
 
 sm = snakemake  # noqa: F821
 params = sm.params.scene

@@ -6,6 +6,10 @@ imported by the scripts that run inside YADE (yade_scripts/), which use Debian's
 
 Rooms (sub-packages), one job each:
 
+* ``case`` -- one DEM case, from design point to files: its identity (content key, case id), its
+  scene, the rendered YADE script, the launcher, the floor, its pictures and VTK files.
+* ``study`` -- the published study (docs/study): its planned and finished cases, its summary.md,
+  restoring its cases into a workflow directory, the published folders' checksums.
 * ``loop`` -- the main job's adaptive loop (``snakemake converge``, rules/converge.smk): its stop
   rule about the map, the map's model, where the next batch goes, what a case costs, one step.
 * ``study_rule`` -- the published study's convergence rule (rules/study_rule.smk), as it ran.
@@ -14,11 +18,16 @@ Rooms (sub-packages), one job each:
 * ``surrogate`` -- the noise-aware surrogate, its validation, the saved model and prediction.
 * ``maps`` -- the design maps drawn from the surrogate; ``decisions`` -- from the maps to the
   settings to run a powder at; ``sensitivity`` -- the parameters ranked by influence.
-* ``metrics`` -- one case's raw YADE output reduced to its row of the results table.
+* ``metrics`` -- one case's raw YADE output reduced to its row of the results table (with the exact
+  sphere/box volumes, ``metrics.geometry``).
 * ``noise_law`` -- the noise law fitted to seed repeats and applied to a results table.
 
 Where each concept is held (one module each):
 
+* case identity, content keys: ``case.identity`` (case_scene, case_id, content_key); a case's
+  scene: ``case.scene``; its script: ``case.render``; its run: ``case.launcher``; its floor:
+  ``case.substrate``
+* the published study: ``study`` (``cases``, ``summary``, ``restore``, ``checksums``)
 * design space, the unit cube: ``design`` (NAMES, PARAMETERS, TARGETS; to_unit / to_physical)
 * results table, usable cases: ``table`` (build_table; usable = finished and not flagged)
 * partitions (the LDS prefix ``index < n``): ``surrogate.training_rows.partition``; the study

@@ -1,6 +1,6 @@
 """Saving figures: every figure as PNG (for eyes and reports) and PDF (vector, for papers), with
 the numbers behind it as CSV beside it; a figure of DEM results (or of a model of them) names
-the floor they were measured on (spreadmap.substrate.floor_label) above its title and in a
+the floor they were measured on (spreadmap.case.substrate.floor_label) above its title and in a
 `floor` column of its CSV."""
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ def floor_note(fig, floor: str) -> None:
 def save_figure(fig, path_stem, data: pd.DataFrame, floor: str | None = None) -> dict[str, Path]:
     """Save ``fig`` as ``<path_stem>.png`` and ``.pdf`` and ``data`` as ``<path_stem>.csv``.
 
-    With ``floor`` (spreadmap.substrate.floor_label) the figure names it above its title and the
+    With ``floor`` (spreadmap.case.substrate.floor_label) the figure names it above its title and the
     CSV gets it as a last column, ``floor``. Parent directories are created; the figure is closed.
     Returns ``{"png", "pdf", "csv"}``.
     """

@@ -73,7 +73,7 @@ def chosen_points(points_config: dict | None, base_dir=".", presets=None) -> lis
 # A point's name is part of file paths (results/pictures/<name>.png, results/vtk/<name>/) and a
 # wildcard of the rules that make them: no separator, no parent folder, not empty.
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
-# a preset's name starts every case id (spreadmap.cases.CASE_ID_PATTERN)
+# a preset's name starts every case id (spreadmap.case.identity.CASE_ID_PATTERN)
 _PRESET = re.compile(r"[a-z][a-z0-9_]*")
 
 

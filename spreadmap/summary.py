@@ -61,7 +61,7 @@ def set_summary(table: pd.DataFrame, rules: dict | None = None) -> dict:
 def run_summary(tables: dict[str, pd.DataFrame], rules: dict | None = None, floor: str | None = None) -> dict:
     """Per set and over the distinct cases; with `rules` (the config's `regime`), the rule is said
     and labels that differ from it are counted (stale_regime_labels); with `floor`
-    (spreadmap.substrate.floor_label), the floor the cases ran on is named."""
+    (spreadmap.case.substrate.floor_label), the floor the cases ran on is named."""
     sets = {name: set_summary(t, rules) for name, t in tables.items()}
     filled = [t for t in tables.values() if len(t)]
     unique = pd.concat(filled, ignore_index=True) if filled else pd.DataFrame()

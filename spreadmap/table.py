@@ -9,16 +9,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .case.substrate import effective_gap_um
 from .files import atomic_path
 from .metrics import NEW_COLUMNS
 from .records import read_metrics
-from .substrate import effective_gap_um
 
 FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
                  "mfr", "pd", "regime", "flagged", "flag_reason", "reason"]
 # after every other column (added later than the rest): noise estimate and layer quality
 LAST_COLUMNS = list(NEW_COLUMNS)
-# last of all, where the cases' metrics name their floor (spreadmap.substrate): the floor, a rough
+# last of all, where the cases' metrics name their floor (spreadmap.case.substrate): the floor, a rough
 # substrate's jitter, and the gap measured over it: h on a flat floor, h + the substrate's mean
 # hollow depth on a rough one (README, "The model": two gaps)
 FLOOR_COLUMNS = ["substrate", "substrate_jitter", "h_eff_um", "h_eff_over_d"]
@@ -67,7 +67,7 @@ def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFr
 
 
 def with_effective_gap(table: pd.DataFrame) -> pd.DataFrame:
-    """The table with h_eff_um and h_eff_over_d (spreadmap.substrate.effective_gap_um) where its
+    """The table with h_eff_um and h_eff_over_d (spreadmap.case.substrate.effective_gap_um) where its
     rows name their floor (a `substrate` column; NaN in a row whose floor is unknown); as it is
     where they do not (tables of metrics from before the floor was recorded)."""
     if "substrate" not in table.columns:

@@ -12,10 +12,10 @@ import pytest
 from dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import case_scene
+from spreadmap.case.identity import case_scene
+from spreadmap.case.launcher import run_case
+from spreadmap.case.render import render
 from spreadmap.files import write_text_atomically
-from spreadmap.launcher import run_case
-from spreadmap.render import render
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -44,7 +44,7 @@ def keyed_table(table, config: dict):
     """A copy of a published cases table (a DataFrame) as a table published after content keys
     (issue 35) would be: each case id keyed for `config` and the current scene template. A stand-in
     for the restore's tests: the tables in docs/ were published before content keys."""
-    from spreadmap.cases import case_id
+    from spreadmap.case.identity import case_id
 
     out = table.copy()
     out["case_id"] = [case_id(r, r["preset"], config, int(r["seed"])) for r in table.to_dict("records")]

@@ -127,7 +127,7 @@ def test_the_study_publishes_and_answers_from_a_finished_run(finished_run, tmp_p
     import pandas as pd
     from conftest import ROOT
 
-    from spreadmap.study_summary import NOT_YET
+    from spreadmap.study.summary import NOT_YET
 
     out = tmp_path / "study"
     run = subprocess.run([sys.executable, str(ROOT / "tools" / "publish_study.py"), str(finished_run), "--out", str(out)],

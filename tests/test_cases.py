@@ -1,7 +1,7 @@
-"""Case identity by content (spreadmap/cases.py, issue 35): every parameter that changes a simulation
+"""Case identity by content (spreadmap/case/identity.py, issue 35): every parameter that changes a simulation
 keys the case, nothing else does; two materials' cases sit side by side in one results folder and
 a switch back re-uses them; folders named before content keys are migrated without re-running
-(spreadmap/migrate_cases.py, tools/migrate_case_ids.py). The workflow tests run two real smoke
+(spreadmap/case/migrate.py, tools/migrate_case_ids.py). The workflow tests run two real smoke
 cases with YADE (a few seconds each); the rest are dry runs."""
 import copy
 import json
@@ -16,9 +16,17 @@ import yaml
 from conftest import FAST_SWEEP, ROOT, deep_update, make_workflow, planned_jobs, snakemake
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, case_id, case_scene, content_key, readable_id, readable_part
-from spreadmap.migrate_cases import legacy_case_folders, migrate_case_folders
-from spreadmap.render import render, template_sha256
+from spreadmap.case.identity import (
+    CASE_ID_PATTERN,
+    LEGACY_CASE_ID_PATTERN,
+    case_id,
+    case_scene,
+    content_key,
+    readable_id,
+    readable_part,
+)
+from spreadmap.case.migrate import legacy_case_folders, migrate_case_folders
+from spreadmap.case.render import render, template_sha256
 
 POINT = {"f": 0.31544, "d_um": 16.0712, "h_um": 57.8541, "v_mm_s": 8.01083}
 

@@ -9,12 +9,12 @@ from figure_text import pdf_text
 from scipy import stats
 
 from spreadmap import study_rule as cv
+from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, to_physical, to_unit
 from spreadmap.loop import active, stepper
 from spreadmap.loop import map_criteria as mc
 from spreadmap.loop import model as mm
 from spreadmap.sampling import halton, halton_unit
-from spreadmap.substrate import floor_label
 
 TOL = cv.DEFAULT_TOLERANCE
 
@@ -780,8 +780,8 @@ def test_cost_law_is_recovered_from_tables_of_machines_of_different_speeds(confi
     here from scene_parameters), on three 'machines' 1x, 1.6x and 0.7x as fast, log-normal
     scatter SD 0.1; fit_law gets the exponents within 0.05 and ln_a as the median machine's;
     failed cases and presets the config does not know are not learned from."""
+    from spreadmap.case.scene import scene_parameters
     from spreadmap.loop.cost import PlannedCost, fit_law
-    from spreadmap.scene import scene_parameters
 
     rng = np.random.default_rng(4)
     tables = []

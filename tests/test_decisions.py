@@ -19,11 +19,11 @@ from figure_text import pdf_text
 from scipy.stats import norm
 
 from spreadmap import config as spreadmap_config
+from spreadmap.case.substrate import floor_label
 from spreadmap.decisions import DecisionError, decision_config, recommendations
 from spreadmap.decisions.explorer import write_explorer
 from spreadmap.decisions.feasibility import powders_from_config
 from spreadmap.decisions.figure import decision_figure
-from spreadmap.substrate import floor_label
 
 SIGMA, NOISE = 0.01, 0.02            # model SD and a run's noise SD of coverage
 LOW, HIGH = np.array([0.15, 10.0, 55.0, 5.0]), np.array([0.45, 50.0, 75.0, 15.0])

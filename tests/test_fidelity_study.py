@@ -9,8 +9,8 @@ import pytest
 from scipy import stats
 
 from spreadmap import config as spreadmap_config
+from spreadmap.case.scene import scene_parameters
 from spreadmap.fidelity import plan, plots, study
-from spreadmap.scene import scene_parameters
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from conftest import FAST_SWEEP, deep_update, make_workflow, planned_jobs, snakemake
 
-from spreadmap.launcher import clean_environment, yade_executable
+from spreadmap.case.launcher import clean_environment, yade_executable
 
 pytestmark = pytest.mark.yade
 

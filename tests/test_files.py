@@ -8,10 +8,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from spreadmap.case.launcher import write_json_atomically
+from spreadmap.case.vtk_export import write_vtk
 from spreadmap.files import atomic_path, write_text_atomically
-from spreadmap.launcher import write_json_atomically
 from spreadmap.table import write_table
-from spreadmap.vtk_export import write_vtk
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""Tests of spreadmap.geometry: exact sphere/box intersection volumes and solid fractions.
+"""Tests of spreadmap.metrics.geometry: exact sphere/box intersection volumes and solid fractions.
 
 Every expected value is independent of the implementation (a closed-form octant expansion):
 textbook volumes (ball, cap, slab, symmetric fractions), Monte Carlo estimates, a 2-D midpoint
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from spreadmap.geometry import _general_volume, cap_volume, solid_fraction, sphere_box_volume, sphere_volume_below
+from spreadmap.metrics.geometry import _general_volume, cap_volume, solid_fraction, sphere_box_volume, sphere_volume_below
 
 BALL = 4.0 * np.pi / 3.0
 

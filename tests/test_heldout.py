@@ -144,7 +144,7 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
     assert all(s["inside"] >= 9 for s in summary), summary
     assert "seed means inside their 95% intervals" in r.stdout
     # the study's summary states the check from these files, and names every point outside
-    from spreadmap.study_summary import summary_markdown
+    from spreadmap.study.summary import summary_markdown
 
     text = summary_markdown(tmp_path)
     for t in ("mfr", "pd"):

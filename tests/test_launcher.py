@@ -6,8 +6,8 @@ import re
 import pandas as pd
 import pytest
 
-from spreadmap.cases import case_scene
-from spreadmap.launcher import failure_reason, failure_record, retry_wanted
+from spreadmap.case.identity import case_scene
+from spreadmap.case.launcher import failure_reason, failure_record, retry_wanted
 from spreadmap.metrics import case_metrics
 from spreadmap.summary import run_summary, summary_text
 from spreadmap.table import build_table
@@ -100,7 +100,7 @@ def test_a_killed_launcher_takes_its_yade_run_with_it(tmp_path):
     fake = tmp_path / "yade"
     fake.write_text("#!/bin/sh\necho \"stand-in yade pid $$\"\nexec sleep 60\n")
     fake.chmod(0o755)
-    code = ("import sys; from spreadmap.launcher import run_case; "
+    code = ("import sys; from spreadmap.case.launcher import run_case; "
             "run_case(sys.argv[1], sys.argv[2], sys.argv[3], 60)")
     env = {**os.environ, "SPREADMAP_YADE": str(fake), "PYTHONPATH": str(Path(__file__).resolve().parent.parent)}
     log = tmp_path / "run.log"

@@ -7,9 +7,9 @@ from figure_text import pdf_text
 from scipy.stats import norm
 
 from spreadmap import maps
+from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
 from spreadmap.maps import grids
-from spreadmap.substrate import floor_label
 from spreadmap.surrogate.models import GPModel
 from spreadmap.surrogate.saved_model import SurrogateModel
 

@@ -346,7 +346,7 @@ def test_a_rough_substrate_below_z0_is_not_powder():
 def test_the_table_names_each_cases_floor_and_its_effective_gap(tmp_path):
     """case_metrics carries the floor from the raw record's params (a record from before the floor
     was recorded ran on the scene's default, flat); the table builder adds the effective gap: h on
-    the flat floor, h + (1/6 + jitter/4) d on the rough one (spreadmap.substrate); the older columns
+    the flat floor, h + (1/6 + jitter/4) d on the rough one (spreadmap.case.substrate); the older columns
     keep their places and the floor's come last."""
     import json
 

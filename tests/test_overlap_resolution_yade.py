@@ -1,5 +1,5 @@
 """The stability record cannot miss an impact: the scene reads the peak overlap every
-`overlap_every` steps, an eighth of the shortest contact it expects (spreadmap.scene), and a Hertz
+`overlap_every` steps, an eighth of the shortest contact it expects (spreadmap.case.scene), and a Hertz
 impact sampled at that stride, at any phase, keeps its peak within 3 % of Hertz theory; sampled
 every 1000 steps (the old monitor) it is missed. Runs the real YADE binary."""
 import json
@@ -9,8 +9,8 @@ import subprocess
 import pytest
 from conftest import ROOT
 
-from spreadmap.launcher import clean_environment, yade_executable
-from spreadmap.scene import scene_parameters
+from spreadmap.case.launcher import clean_environment, yade_executable
+from spreadmap.case.scene import scene_parameters
 
 pytestmark = pytest.mark.yade
 E, NU = 2.1e9, 0.3

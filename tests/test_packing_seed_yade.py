@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from spreadmap.launcher import clean_environment, yade_executable
+from spreadmap.case.launcher import clean_environment, yade_executable
 
 pytestmark = pytest.mark.yade
 

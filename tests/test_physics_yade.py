@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from conftest import ROOT, case_params, run_scene, with_preset
 
-from spreadmap.geometry import solid_fraction
-from spreadmap.launcher import clean_environment, yade_executable
+from spreadmap.case.launcher import clean_environment, yade_executable
+from spreadmap.metrics.geometry import solid_fraction
 
 pytestmark = pytest.mark.yade
 E, NU, RHO = 2.1e9, 0.3, 7980.0

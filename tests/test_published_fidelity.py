@@ -10,7 +10,7 @@ import pytest
 from conftest import ROOT
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import readable_id
+from spreadmap.case.identity import readable_id
 from spreadmap.fidelity import plan, study
 
 STUDIES = [d for d in (ROOT / "docs" / "fidelity", ROOT / "docs" / "fidelity_flat") if (d / "config.yaml").exists()]

@@ -7,9 +7,9 @@ import subprocess
 import pytest
 from conftest import case_params, run_scene
 
-from spreadmap.launcher import clean_environment, yade_executable
+from spreadmap.case.launcher import clean_environment, yade_executable
+from spreadmap.case.render import render, template_sha256
 from spreadmap.metrics import case_metrics
-from spreadmap.render import render, template_sha256
 
 
 def test_rendered_script_embeds_the_parameters(config):

@@ -1,4 +1,4 @@
-"""Resuming a published study on a new machine (spreadmap/restore.py, tools/restore_study.py): the
+"""Resuming a published study on a new machine (spreadmap/study/restore.py, tools/restore_study.py): the
 restored cases give back the published table exactly, a real result is never overwritten, and
 Snakemake plans no YADE run for a restored case of its own scene and every run for one of another
 scene; a table published before content keys (issue 35) is refused. The dry runs are cheap (no YADE).
@@ -19,9 +19,9 @@ import yaml
 from conftest import ROOT, keyed_table, make_workflow, planned_jobs, snakemake, study_config
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import readable_part
-from spreadmap.checksums import write_manifest
-from spreadmap.restore import UnkeyedTableError, restore_cases, restore_steps
+from spreadmap.case.identity import readable_part
+from spreadmap.study.checksums import write_manifest
+from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps
 from spreadmap.table import build_table
 
 STUDY = ROOT / "docs" / "study"

@@ -7,9 +7,9 @@ import synthetic_cases as syn
 from figure_text import pdf_text
 
 from spreadmap import sensitivity
+from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds, to_physical
 from spreadmap.sensitivity import FunctionDraws
-from spreadmap.substrate import floor_label
 from spreadmap.surrogate.models import GPModel
 from spreadmap.surrogate.saved_model import SurrogateModel
 

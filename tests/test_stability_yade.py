@@ -6,9 +6,9 @@ import time
 import pytest
 from conftest import case_params, run_many, run_scene, with_preset
 
-from spreadmap.launcher import retry_wanted
+from spreadmap.case.launcher import retry_wanted
+from spreadmap.case.scene import DENSEST_PACKING, UnsafeTimeStep, rayleigh_time_step, scene_parameters
 from spreadmap.metrics import MAX_WEDGE_OVERLAP, PHASES, case_metrics
-from spreadmap.scene import DENSEST_PACKING, UnsafeTimeStep, rayleigh_time_step, scene_parameters
 
 pytestmark = pytest.mark.yade
 

@@ -1,4 +1,4 @@
-"""The study's plan (spreadmap.study_cases) is the plan the workflow runs, and the published study
+"""The study's plan (spreadmap.study.cases) is the plan the workflow runs, and the published study
 (docs/study/) holds the cases of that plan with the tables they recompute to."""
 import copy
 import json
@@ -10,9 +10,9 @@ import pytest
 from conftest import ROOT, make_workflow, snakemake
 
 from spreadmap import config as spreadmap_config
-from spreadmap.cases import case_id, readable_id, readable_part
+from spreadmap.case.identity import case_id, readable_id, readable_part
 from spreadmap.design import NAMES
-from spreadmap.study_cases import cpu_hours_to_go, finished_table, planned_cases, planned_sweeps, progress
+from spreadmap.study.cases import cpu_hours_to_go, finished_table, planned_cases, planned_sweeps, progress
 from spreadmap.table import usable
 
 DOCS = ROOT / "docs" / "study"
@@ -92,9 +92,9 @@ def test_cpu_to_go_is_the_plans_cost_at_this_machines_speed(config):
     CPU to go is the law's sum over the other 33 (computed here from the scene's planned spheres
     and steps and the law's formula) times the factor, within the scatter's median error; with
     no case finished, the law uncalibrated."""
+    from spreadmap.case.scene import scene_parameters
     from spreadmap.design import NAMES
     from spreadmap.loop.cost import DEFAULT_LAW
-    from spreadmap.scene import scene_parameters
 
     cfg = copy.deepcopy(config)
     cfg["sweeps"] = {"lds": {"seed": 42, "partitions": [81]}, "lattice": {"k": [3]}}
@@ -167,7 +167,7 @@ def test_the_loops_cases_so_far_follow_its_steps(config):
     """Start 4 LDS cases, batches of 2 (one LDS, one active): the loop's cases are the first four
     of the sequence, then each step's batch in order, labelled by batch and LDS share as the
     workflow's converge table labels them."""
-    from spreadmap.study_cases import loop_cases
+    from spreadmap.study.cases import loop_cases
 
     cfg = copy.deepcopy(config)
     cfg["sweeps"] = {"lds": {"seed": 42, "partitions": [4]}}
@@ -189,7 +189,7 @@ def test_published_loop_cases_are_its_steps_cases(published):
     """cases_converge.csv (the loop so far) holds the cases its published steps planned, in run order,
     with their batch and LDS-share labels: the cases of the last step, whose CPU it equals, then
     those of the batch that step chose which had finished when it was published."""
-    from spreadmap.study_cases import loop_cases
+    from spreadmap.study.cases import loop_cases
 
     cfg, _ = published
     steps = [json.loads(s.read_text()) for s in (DOCS / "converge" / "steps").glob("step_*.json")]
@@ -242,11 +242,11 @@ def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(publ
 
 
 def test_published_summary_recomputes_from_the_published_files(published, tmp_path):
-    """summary.md and the trend tables are what spreadmap.study_summary makes of docs/study's
+    """summary.md and the trend tables are what spreadmap.study.summary makes of docs/study's
     committed cases, steps, surrogate and maps today (in a copy: the summary writes trend_*.csv)."""
     import shutil
 
-    from spreadmap.study_summary import summary_markdown
+    from spreadmap.study.summary import summary_markdown
 
     cfg, _ = published
     copy_ = tmp_path / "study"
@@ -298,7 +298,7 @@ def test_publishing_names_cases_by_the_workflow_directorys_own_template(tmp_path
     import subprocess
     import sys
 
-    from spreadmap.render import template_sha256
+    from spreadmap.case.render import template_sha256
 
     wf = make_workflow(tmp_path, {"sweeps": {"lds": {"seed": 42, "partitions": [3]}}})
     template = wf / "yade_scripts" / "spreading_case.py"

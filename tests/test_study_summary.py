@@ -1,4 +1,4 @@
-"""The study's summary (spreadmap.study_summary): partial dependence against functions of known
+"""The study's summary (spreadmap.study.summary): partial dependence against functions of known
 effect, and the answers it writes from a study folder's files (analysis code: synthetic inputs)."""
 import json
 
@@ -7,7 +7,7 @@ import pandas as pd
 
 from spreadmap.design import NAMES
 from spreadmap.sensitivity.draws import FunctionDraws
-from spreadmap.study_summary import NOT_YET, main_effect, summary_markdown
+from spreadmap.study.summary import NOT_YET, main_effect, summary_markdown
 
 RANGES = {"f": {"min": 0.15, "max": 0.45}, "d_um": {"min": 10, "max": 50}, "h_um": {"min": 55, "max": 75},
           "v_mm_s": {"min": 5, "max": 15}}
@@ -118,7 +118,7 @@ def test_the_summary_names_the_floor_of_the_studys_config(tmp_path):
 
 
 def test_flag_causes_are_counted_by_their_cause_with_numbers_hidden():
-    from spreadmap.study_summary import _flag_causes
+    from spreadmap.study.summary import _flag_causes
 
     flagged = pd.DataFrame({"flag_reason": [
         "flow fell by 15% over the window (-4.6 SE): the pile ran down",

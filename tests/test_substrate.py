@@ -1,4 +1,4 @@
-"""The rough substrate's mean hollow depth (spreadmap.substrate) against an independent numerical
+"""The rough substrate's mean hollow depth (spreadmap.case.substrate) against an independent numerical
 integral: Monte Carlo over random points of an explicitly built lattice of spheres laid as the scene
 lays them (yade_scripts/spreading_case.py), with random depths, the surface at each point the
 highest cap over it among all spheres; and the limits derived by hand."""
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from spreadmap.substrate import COVERED, effective_gap_um, floor_label, mean_hollow_depth
+from spreadmap.case.substrate import COVERED, effective_gap_um, floor_label, mean_hollow_depth
 
 D = 1.0  # lengths in particle diameters
 R = 0.5 * D

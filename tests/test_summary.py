@@ -21,7 +21,7 @@ def test_counts_and_reasons_said_once():
 
 
 def test_the_summary_names_its_floor():
-    from spreadmap.substrate import floor_label
+    from spreadmap.case.substrate import floor_label
 
     table = pd.DataFrame({"case_id": ["a"], "status": ["ok"], "regime": ["normal"], "flagged": [False], "flag_reason": [""]})
     floor = floor_label({"scene": {"substrate": {"kind": "rough", "jitter": 0.5}}})

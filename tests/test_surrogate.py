@@ -231,7 +231,7 @@ def test_mlp_draws_the_maps_when_configured():
 def test_plots_written(result, tmp_path):
     from figure_text import pdf_text
 
-    from spreadmap.substrate import floor_label
+    from spreadmap.case.substrate import floor_label
     from spreadmap.surrogate.plots import plot_all
 
     floor = floor_label({"scene": {"substrate": {"kind": "rough", "jitter": 0.5}}})

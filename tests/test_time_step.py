@@ -2,7 +2,7 @@
 values (5.3e-8 s at d = 10 um, 2.7e-7 s at d = 50 um, physical density)."""
 import pytest
 
-from spreadmap.scene import rayleigh_time_step
+from spreadmap.case.scene import rayleigh_time_step
 
 E, NU, RHO = 2.1e9, 0.3, 7980.0
 

@@ -1,4 +1,4 @@
-"""Case pictures (spreadmap.trajectory) and VTK export (spreadmap.vtk_export), on synthetic raw
+"""Case pictures (spreadmap.case.pictures) and VTK export (spreadmap.case.vtk_export), on synthetic raw
 results: no YADE needed."""
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ import pytest
 from matplotlib.collections import PatchCollection
 from vtk_reader import read_vtk, read_vtk_points
 
-from spreadmap.trajectory import TABLE_COLUMNS, build_case_figure, choose_moments, plot_case_views, sphere_table, view_window
-from spreadmap.vtk_export import export_case, write_vtk
+from spreadmap.case.pictures import TABLE_COLUMNS, build_case_figure, choose_moments, plot_case_views, sphere_table, view_window
+from spreadmap.case.vtk_export import export_case, write_vtk
 
 D = 20e-6  # sphere diameter, m
 GAP = 50e-6

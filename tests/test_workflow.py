@@ -123,7 +123,7 @@ def test_the_costliest_cases_start_first(tmp_path):
     import re
 
     from spreadmap import config as spreadmap_config
-    from spreadmap.cases import case_scene
+    from spreadmap.case.identity import case_scene
 
     points = {f"p{i}": {"f": 0.3, "d_um": d, "h_um": 75, "v_mm_s": 10} for i, d in enumerate((50, 45, 40, 35))}
     cfg = copy.deepcopy(FAST_SWEEP)

@@ -1,4 +1,4 @@
-"""A plain, strict reader of the legacy ASCII VTK PolyData files that spreadmap.vtk_export
+"""A plain, strict reader of the legacy ASCII VTK PolyData files that spreadmap.case.vtk_export
 writes (the tests read back what was written with it)."""
 from __future__ import annotations
 

@@ -22,10 +22,10 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from spreadmap.case.substrate import floor_label, floor_of  # noqa: E402
 from spreadmap.config import load  # noqa: E402
 from spreadmap.fidelity.correction import config_block, correction, pairs  # noqa: E402
 from spreadmap.fidelity.plots import correction_figure  # noqa: E402
-from spreadmap.substrate import floor_label, floor_of  # noqa: E402
 
 
 def main(argv=None) -> int:

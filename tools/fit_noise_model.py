@@ -26,12 +26,12 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from spreadmap.case.substrate import floor_label  # noqa: E402
 from spreadmap.metrics.noise import calibration_factors  # noqa: E402
 from spreadmap.noise_law.cells import OTHER_ARMS, published_cells  # noqa: E402
 from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval  # noqa: E402
 from spreadmap.noise_law.heldout import leave_point_out, predictive_check, scored  # noqa: E402
 from spreadmap.noise_law.plot import law_figure  # noqa: E402
-from spreadmap.substrate import floor_label  # noqa: E402
 
 TARGETS = ("mfr", "pd")
 BANDS = ((0.0, 2.0, "h/d < 2"), (2.0, 3.0, "2 <= h/d < 3"), (3.0, math.inf, "h/d >= 3"))

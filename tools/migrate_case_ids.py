@@ -1,6 +1,6 @@
 #!/usr/bin/env python
 """Rename a workflow directory's case folders named before content keys (issue 35) to their content
-ids, without re-running them (spreadmap/migrate_cases.py):
+ids, without re-running them (spreadmap/case/migrate.py):
 
     .venv/bin/python tools/migrate_case_ids.py WORKDIR [--dry-run]
 
@@ -18,7 +18,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from spreadmap.migrate_cases import migrate_case_folders  # noqa: E402
+from spreadmap.case.migrate import migrate_case_folders  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Re-make (or check) the SHA256SUMS manifests of the published folders (spreadmap/checksums.py).
+"""Re-make (or check) the SHA256SUMS manifests of the published folders (spreadmap/study/checksums.py).
 
     .venv/bin/python tools/publish_checksums.py [FOLDER ...]          # re-make: after publishing
     .venv/bin/python tools/publish_checksums.py --check [FOLDER ...]  # check: exit 1 on a mismatch
@@ -19,7 +19,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from spreadmap.checksums import MANIFEST, PUBLISHED, check_folder, listed_files, write_manifest  # noqa: E402
+from spreadmap.study.checksums import MANIFEST, PUBLISHED, check_folder, listed_files, write_manifest  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -14,11 +14,11 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from spreadmap import config as spreadmap_config  # noqa: E402
+from spreadmap.case.substrate import floor_label  # noqa: E402
 from spreadmap.decisions import decision_config, powders_from_config, recommendations  # noqa: E402
 from spreadmap.decisions.explorer import write_explorer  # noqa: E402
 from spreadmap.decisions.figure import decision_figure  # noqa: E402
 from spreadmap.files import write_text_atomically  # noqa: E402
-from spreadmap.substrate import floor_label  # noqa: E402
 from spreadmap.surrogate import load_model  # noqa: E402
 from spreadmap.surrogate.settings import map_config  # noqa: E402
 

@@ -10,8 +10,8 @@ finished cases), the config it ran with, and copies the analyses that exist (the
 sweeps' convergence, the converge run's steps so far (and, while it runs, the table of its cases
 so far), its table and stopping path, the surrogate, the maps, the
 held-out points' table); what does not exist yet is listed. Then summary.md (and the trends'
-tables trend_*.csv) from what is there (spreadmap.study_summary). Last, the folder's SHA256SUMS
-(spreadmap.checksums: what tools/restore_study.py verifies before it restores). A later session
+tables trend_*.csv) from what is there (spreadmap.study.summary). Last, the folder's SHA256SUMS
+(spreadmap.study.checksums: what tools/restore_study.py verifies before it restores). A later session
 grows the same workflow directory (Snakemake re-uses every finished case) and publishes again.
 """
 from __future__ import annotations
@@ -26,11 +26,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from spreadmap import config as cfgmod  # noqa: E402
-from spreadmap.cases import readable_part  # noqa: E402
-from spreadmap.checksums import write_manifest  # noqa: E402
-from spreadmap.render import template_sha256  # noqa: E402
-from spreadmap.study_cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress  # noqa: E402
-from spreadmap.study_summary import summary_markdown  # noqa: E402
+from spreadmap.case.identity import readable_part  # noqa: E402
+from spreadmap.case.render import template_sha256  # noqa: E402
+from spreadmap.study.cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress  # noqa: E402
+from spreadmap.study.checksums import write_manifest  # noqa: E402
+from spreadmap.study.summary import summary_markdown  # noqa: E402
 from spreadmap.table import write_table  # noqa: E402
 
 COPIES = {  # source under the workflow directory -> destination under --out
@@ -60,7 +60,7 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "study")
     args = ap.parse_args(argv)
     config = cfgmod.load(args.workdir / "config.yaml")
-    # the case ids the workflow directory's own scene template gives (content ids, spreadmap.cases)
+    # the case ids the workflow directory's own scene template gives (content ids, spreadmap.case.identity)
     template = args.workdir / "yade_scripts" / "spreading_case.py"
     sha = template_sha256(template) if template.exists() else None
     args.out.mkdir(parents=True, exist_ok=True)

@@ -30,9 +30,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from spreadmap import config as cfgmod  # noqa: E402
-from spreadmap.launcher import run_case, write_json_atomically  # noqa: E402
+from spreadmap.case.launcher import run_case, write_json_atomically  # noqa: E402
+from spreadmap.case.render import render, template_sha256  # noqa: E402
 from spreadmap.metrics import case_metrics  # noqa: E402
-from spreadmap.render import render, template_sha256  # noqa: E402
 
 FIELDS = ("peak_overlap_free", "peak_overlap_wedged")
 
@@ -72,7 +72,7 @@ def reattribute(case_dir: Path, config: dict, dry_run: bool = False) -> dict:
         return {**row, "done": False, "why": f"not the same simulation: {differs}"}
     if dry_run:
         return {**row, "done": False, "why": "dry run"}
-    simulated_path = case_dir / "simulated.json"  # the launcher's re-use copy (spreadmap.launcher.simulate)
+    simulated_path = case_dir / "simulated.json"  # the launcher's re-use copy (spreadmap.case.launcher.simulate)
     times = {p: (p.stat().st_atime, p.stat().st_mtime) for p in (raw_path, metrics_path, simulated_path) if p.exists()}
     note = {"reattributed": {"tool": "tools/reattribute_wedges.py", "scene_sha256": params["scene_sha256"],
                              **{f"old_{k}": old.get(k) for k in FIELDS}}}

@@ -265,7 +265,7 @@ def explorer_html(data: dict, n_cases: int) -> str:
 
 def write_explorer(model, dec: dict, support: dict, path, csv=None, floor: str | None = None) -> dict:
     """Write the page (and, given ``csv``, its numbers as a table); return the page's data.
-    ``floor``: the floor the model's cases ran on (spreadmap.substrate.floor_label), named on the
+    ``floor``: the floor the model's cases ran on (spreadmap.case.substrate.floor_label), named on the
     page and in the table."""
     data = {**explorer_data(model, dec, support), "floor": floor}
     write_text_atomically(path, explorer_html(data, len(model.train_X)))

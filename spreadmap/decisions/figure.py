@@ -36,7 +36,7 @@ def decision_figure(grids: dict, table: pd.DataFrame, powders, dec: dict, suppor
                     floor: str | None = None):
     """Draw and save (PNG, PDF, and the grids as CSV) the probability maps with the recommendations.
     ``grids``: powder name -> ``feasibility`` frame; ``table``: ``recommendations``' table; ``floor``:
-    the floor the surrogate's cases were spread on (spreadmap.substrate.floor_label)."""
+    the floor the surrogate's cases were spread on (spreadmap.case.substrate.floor_label)."""
     n = len(powders)
     cols = min(n, 3)
     rows = -(-n // cols)

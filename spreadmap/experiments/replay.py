@@ -34,19 +34,19 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from ..case.scene import precision_target
 from ..design import NAMES
 from ..loop import map_criteria
 from ..loop.cost import PlannedCost
 from ..loop.model import make_map_fit
 from ..loop.stepper import step
 from ..sampling import halton
-from ..scene import precision_target
 
 TARGETS = ("mfr", "pd")
 
 
 def passed_spheres(X: np.ndarray, mfr: np.ndarray, preset: Mapping, config: Mapping) -> np.ndarray:
-    """Spheres a case's window measures: the preset's precision target (``scene.precision_target``),
+    """Spheres a case's window measures: the preset's precision target (``case.scene.precision_target``),
     at least the spheres of its shortest window and at most those of its longest
     (MFR x h/d x width x window x 6/pi)."""
     X = np.asarray(X, float)

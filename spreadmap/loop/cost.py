@@ -6,7 +6,7 @@ The loop's batches go where a case buys the most map per CPU-second (``active``'
 ``ivr_per_cpu``). When the cost came from a model fitted on the run's own measured ``cpu_time``,
 a repeated or resumed run picked other cases (the machine's speed changes between sessions and
 with load: 6 of 16 cases differed after a resume). A case's CPU is set by what the scene plans
-for it, ``scene.scene_parameters``: its sphere count N and its estimated steps S, both known
+for it, ``case.scene.scene_parameters``: its sphere count N and its estimated steps S, both known
 before it runs and the same on every machine. The law is
 
     CPU [s] = exp(ln_a) * N^b_particles * S^b_steps
@@ -34,7 +34,7 @@ DEFAULT_LAW = {"ln_a": -18.615, "b_particles": 1.092, "b_steps": 1.324}
 
 def planned_work(points: np.ndarray, config: Mapping, preset: str) -> np.ndarray:
     """(N spheres, estimated steps) the scene plans for each design point (physical, NAMES order)."""
-    from ..scene import scene_parameters
+    from ..case.scene import scene_parameters
 
     out = np.empty((len(points), 2))
     for i, p in enumerate(np.asarray(points, float)):

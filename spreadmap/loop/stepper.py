@@ -37,7 +37,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..cases import rounded
+from ..case.identity import rounded
 from ..design import NAMES
 from ..sampling import halton
 from ..study_rule.rule import batches_until_converged

@@ -4,7 +4,7 @@
 the machine map's y axis); one module per figure draws: ``machine`` (machine map), ``powder``
 (band and cluster maps), ``parallel`` (parallel coordinates of the DEM cases), ``regimes``;
 ``labels`` places line labels, ``style`` holds what the figures share. Every figure takes
-``floor`` (spreadmap.substrate.floor_label of the config its cases ran with) and names it above its
+``floor`` (spreadmap.case.substrate.floor_label of the config its cases ran with) and names it above its
 title and in its CSV (spreadmap.figures.save_figure).
 """
 from .grids import choose_machine_y

@@ -6,6 +6,7 @@ layer   layer quality: packing within the layer's own thickness, coverage, rough
 noise   the case's own noise estimate (counting statistics; batch means within the case)
 regime  the regime rule (scalars or arrays: DEM cases and surrogate predictions alike)
 case    case_metrics: all of it plus the diagnostics and the stability flags
+geometry  exact sphere / axis-aligned-box intersection volumes (the layer's packing density)
 """
 from .case import MAX_WEDGE_OVERLAP, MIN_HEAP_H2, NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure
 from .flow import (

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ..geometry import sphere_box_volume, sphere_volume_below
+from .geometry import sphere_box_volume, sphere_volume_below
 
 
 def sphere_volume(diameter: float) -> float:

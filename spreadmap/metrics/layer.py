@@ -17,7 +17,7 @@ and s = 0 (the bare floor) where no sphere lies above the point. Why this one:
 - it has no free parameter (a rolling-probe surface needs a probe radius, a smoothed one a
   length), and it is exact at every grid point;
 - all solid above z = 0 lies below it, so the layer's solid volume is exact (sphere/box
-  volumes, spreadmap.geometry), and the measures decompose the study's box fraction exactly when
+  volumes, spreadmap.metrics.geometry), and the measures decompose the study's box fraction exactly when
   the layer is below the gap: solid / (A h) = layer_packing x thickness_ratio.
 What it means: voids under a sphere's overhang count as layer, bare floor does not. A single
 layer of spheres resting on the floor whose shadows do not overlap (square or hexagonal
@@ -56,7 +56,7 @@ import math
 
 import numpy as np
 
-from ..geometry import sphere_box_volume
+from .geometry import sphere_box_volume
 
 
 def grid_centres(x0: float, x1: float, width: float, spacing: float) -> tuple[np.ndarray, np.ndarray]:
@@ -145,7 +145,7 @@ def layer_quality(positions, radii, x0: float, x1: float, width: float, spacing:
 def block_sums(s: np.ndarray, xs: np.ndarray, pos: np.ndarray, rad: np.ndarray, x0: float, x1: float,
                width: float, top: float, n_blocks: int) -> np.ndarray:
     """Per block of equal length along x: cells, sum s, sum s^2, cells with s > 0 and the solid
-    volume inside the block's box (exact, spreadmap.geometry). Each grid column goes to the block
+    volume inside the block's box (exact, spreadmap.metrics.geometry). Each grid column goes to the block
     holding its centre."""
     edges = np.linspace(x0, x1, n_blocks + 1)
     which = np.clip(np.searchsorted(edges, xs, side="right") - 1, 0, n_blocks - 1)

@@ -11,7 +11,7 @@ import pandas as pd
 from scipy import stats
 from scipy.stats import qmc
 
-from ..cases import rounded
+from ..case.identity import rounded
 from ..design import NAMES, to_physical, to_unit
 from ..table import usable
 

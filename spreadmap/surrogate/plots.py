@@ -122,7 +122,7 @@ def plot_learning_curve(learning: pd.DataFrame, stem, floor: str | None = None) 
 
 def plot_all(result, outdir, prefix: str = "surrogate", floor: str | None = None) -> dict:
     """The three figures and the tables (validation metrics, study, out-of-fold) into outdir; with
-    ``floor`` (spreadmap.substrate.floor_label) the figures name the floor the cases ran on."""
+    ``floor`` (spreadmap.case.substrate.floor_label) the figures name the floor the cases ran on."""
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     result.validation.to_csv(outdir / f"{prefix}_metrics.csv", index=False)

@@ -95,8 +95,8 @@ def case_scene(point: dict, preset: str, config: dict, seed: int | None = None,
                scene_sha256: str | None = None) -> tuple[str, dict]:
     """(case id, the parameters of the YADE scene script) of a design point at a preset and packing
     seed (default: the scene's) under a configuration; scene_sha256 is the template's hash
-    (default: spreadmap.render.template_sha256() of the shipped template). Raises
-    spreadmap.scene.UnsafeTimeStep or ValueError for a case that must not run."""
+    (default: spreadmap.case.render.template_sha256() of the shipped template). Raises
+    spreadmap.case.scene.UnsafeTimeStep or ValueError for a case that must not run."""
     from .render import template_sha256
     from .scene import scene_parameters
 

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import write_text_atomically
+from ..files import write_text_atomically
 
 __all__ = ["write_vtk", "export_case", "MOMENT_ORDER"]
 

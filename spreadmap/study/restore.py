@@ -8,14 +8,14 @@ and its benchmark (wall time, peak memory). A restored case gets back its metric
 benchmark.tsv, plus restored.json saying where they came from; its raw YADE record is not
 published and stays missing, so the workflow (rules/common.smk, `case_raw_input`) does not ask for
 it. A row is restored under its own case id, which carries the content key of the scene it was run
-with (spreadmap.cases): the workflow re-uses it only when its own configuration and template give
+with (spreadmap.case.identity): the workflow re-uses it only when its own configuration and template give
 the same key, so a published case is never taken for a case of another material or scene. A table
 whose ids have no content key (published before issue 35) does not say which scene its cases were
 run with: it is refused, naming the table, before anything is restored. A case directory that
 holds a raw record is never touched: a real result wins over a restored one. The loop's step
 records (converge/steps/step_N.json) are restored beside the cases, with modification times in the
 order the workflow made them (cases first, then each step), so that Snakemake sees them up to date.
-Every published file is checked against its folder's SHA256SUMS (spreadmap/checksums.py) before
+Every published file is checked against its folder's SHA256SUMS (spreadmap/study/checksums.py) before
 anything is restored from it: a table that changed since it was published is refused, naming the
 file and how to get it back or re-publish it.
 """
@@ -30,11 +30,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from .cases import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, readable_id
+from ..case.identity import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, readable_id
+from ..files import write_text_atomically
+from ..loop.stepper import step_number
+from ..records import CorruptFileError, read_metrics
 from .checksums import sha256, verified_bytes
-from .files import write_text_atomically
-from .loop.stepper import step_number
-from .records import CorruptFileError, read_metrics
 
 # Columns of a results table that are the table's labels of a case, not the case's metrics.
 LABEL_COLUMNS = ("sweep", "index", "k", "index_in_lattice", "name", "batch", "lds", "knob", "value", "is_base")
@@ -50,7 +50,7 @@ class UnkeyedTableError(ValueError):
 
 
 def check_case_ids(table: pd.DataFrame, table_path) -> None:
-    """Refuse a table unless every row's case id is a content id (spreadmap.cases.CASE_ID_PATTERN)
+    """Refuse a table unless every row's case id is a content id (spreadmap.case.identity.CASE_ID_PATTERN)
     naming the row's own preset, design point and seed."""
     ids = table["case_id"].astype(str)
     legacy = ids.str.fullmatch(LEGACY_CASE_ID_PATTERN)

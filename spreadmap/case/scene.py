@@ -148,7 +148,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "diameter": d,
         "gap": h,
         "blade_speed": v,
-        "density": float(density),  # a float whether the config spells it 7980 or 7980.0: one case (spreadmap.cases)
+        "density": float(density),  # a float whether the config spells it 7980 or 7980.0: one case (spreadmap.case.identity)
         "density_scale": float(preset["density_scale"]),
         "young": float(material["young_pa"]),
         "poisson": float(material["poisson"]),

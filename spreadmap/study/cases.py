@@ -13,9 +13,9 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from spreadmap.cases import case_id, is_legacy_id, readable_part
+from spreadmap.case.identity import case_id, is_legacy_id, readable_part
+from spreadmap.case.render import template_sha256
 from spreadmap.design import NAMES
-from spreadmap.render import template_sha256
 from spreadmap.sampling import halton, lattice
 from spreadmap.table import build_table
 

@@ -19,9 +19,9 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
+from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
 from spreadmap.loop.stepper import step_number
-from spreadmap.substrate import floor_label
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
 
@@ -185,7 +185,7 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
 
 def _verdict_words(low: float, high: float, level: float) -> str:
     """The coverage interval's verdict as the summary says it (surrogate.validation.coverage_verdict)."""
-    from .surrogate.validation import coverage_verdict
+    from ..surrogate.validation import coverage_verdict
 
     words = {"too wide": f"the intervals are too wide (their coverage's CI lies above {100 * level:g} %)",
              "too narrow": f"the intervals are too narrow (their coverage's CI lies below {100 * level:g} %)",

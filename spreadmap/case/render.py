@@ -7,7 +7,7 @@ import pprint
 import re
 from pathlib import Path
 
-TEMPLATE = Path(__file__).resolve().parent.parent / "yade_scripts" / "spreading_case.py"
+TEMPLATE = Path(__file__).resolve().parents[2] / "yade_scripts" / "spreading_case.py"
 _BLOCK = re.compile(r"(# --- case parameters.*?---\n)PARAMS = \{.*?\n\}\n(# --- end of case parameters ---)", re.S)
 # the PARAMS block of a rendered script (render: a pprint of the parameters before the end marker)
 _RENDERED = re.compile(r"^PARAMS = (\{.*?\})\n# --- end of case parameters ---", re.S | re.M)

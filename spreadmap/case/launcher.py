@@ -20,8 +20,8 @@ import sys
 import time
 from pathlib import Path
 
-from .files import atomic_path, write_text_atomically
-from .records import CorruptFileError, read_raw
+from ..files import atomic_path, write_text_atomically
+from ..records import CorruptFileError, read_raw
 
 # Exit codes of yade_scripts/spreading_case.py. Its own verdicts (refused before running, failed a
 # check, blown up) are deterministic: the same case gives the same verdict. Any other code is a

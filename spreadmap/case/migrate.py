@@ -1,11 +1,11 @@
 """Case folders named before content keys (issue 35) renamed to their content ids, without re-running.
 
-Before issue 35 a case id was `<preset>-f..-d..-h..-v..-s<seed>` (spreadmap.cases.LEGACY_CASE_ID_PATTERN):
+Before issue 35 a case id was `<preset>-f..-d..-h..-v..-s<seed>` (spreadmap.case.identity.LEGACY_CASE_ID_PATTERN):
 it did not say which material, scene or template version the case was run with. A legacy folder whose
 parameters are recorded in it is keyed exactly: the raw record's `params` (raw.json, or the launcher's
 simulated.json: what the YADE script ran with), else the PARAMS block of its rendered case.py (what it
 was rendered with; a folder with only case.py had not run). Its new id is its old one plus the content
-key of those parameters (spreadmap.cases.content_key), so a case run with the current configuration
+key of those parameters (spreadmap.case.identity.content_key), so a case run with the current configuration
 and template is found again by the workflow, and one run with another material or template sits
 beside the current ones under its own id. The id recorded inside its text files (params.case_id, the
 metrics' case_id, the case.py header, the logs' prefixes) is rewritten to the new one; every file
@@ -22,8 +22,8 @@ import os
 import re
 from pathlib import Path
 
-from .cases import LEGACY_CASE_ID_PATTERN, keyed_id, readable_id
-from .files import write_text_atomically
+from ..files import write_text_atomically
+from .identity import LEGACY_CASE_ID_PATTERN, keyed_id, readable_id
 from .render import rendered_params
 
 # The files of a case folder that may record its id, rewritten in place (others, e.g. pictures, are moved untouched).
