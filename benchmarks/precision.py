@@ -133,6 +133,10 @@ ARMS = {
     # like sphere-sphere ones (issue 32; every 1000 steps before): what the finer check costs; the
     # check only reads, so MFR and PD must come out bit for bit the same
     "before_box_check": {"rev": "db1422d", "overrides": {}},
+    # the scene issue 31 measured (the last tree before the frozen deposit shipped): the standing
+    # reserve in a full pile, no freeze, no feed, box contacts read every 1000 steps; the arm the
+    # issue's goal is stated against
+    "issue31_start": {"rev": "dd28def", "overrides": {}},
 }
 CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_packing",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",
