@@ -468,8 +468,11 @@ def report(rows: list[dict], arms: list[str]) -> str:
             rate = np.mean([r["n_passed"] for r in rows_a]) / np.mean([r["cpu_time"] for r in rows_a])
             today = complete[p].get("today", [])
             base = (np.mean([r["n_passed"] for r in today]) / np.mean([r["cpu_time"] for r in today])) if today else math.nan
-            ratios[a].append(rate / base)
-            cells.append(f"{rate:.2f} ({rate / base:.2f}x)")
+            if math.isfinite(base):
+                ratios[a].append(rate / base)
+                cells.append(f"{rate:.2f} ({rate / base:.2f}x)")
+            else:  # no `today` arm in this run: the rate alone
+                cells.append(f"{rate:.2f}")
         lines.append(f"| {p} | " + " | ".join(cells) + " |")
     lines += [""] + [f"- **{a}**: {np.mean(ratios[a]):.2f}x today's spheres per CPU-second, mean over "
                      f"{len(ratios[a])} points (range {min(ratios[a]):.2f}-{max(ratios[a]):.2f})"

@@ -206,3 +206,44 @@ def test_layer_noise_pools_the_seed_spread_within_points(tmp_path):
         assert out.loc[m, "seed_sd"] == pytest.approx(np.sqrt(ss / 4), rel=1e-9) and out.loc[m, "seed_sd"] > 0
         assert out.loc[m, "stated_sd"] == pytest.approx(np.sqrt(np.mean(rows[f"{m}_sd"] ** 2)), rel=1e-9)
         assert out.loc[m, "seed_sd_low"] < out.loc[m, "seed_sd"] < out.loc[m, "seed_sd_high"]
+
+
+def test_cost_map_summary_on_a_hand_made_table():
+    """Four cases of 1, 2, 3 and 100 s at h/d 1, 2, 3, 4: mean 26.5, median 2.5, max / median 40,
+    103 of the 106 s (and half the cases) at h/d >= 3."""
+    sys.path.insert(0, str(BENCH))
+    import cost_map
+
+    s = cost_map.summary(np.array([1.0, 2.0, 3.0, 100.0]), np.array([1.0, 2.0, 3.0, 4.0]))
+    assert s["mean"] == pytest.approx(26.5) and s["median"] == pytest.approx(2.5)
+    assert s["max_over_median"] == pytest.approx(40.0)
+    assert s["share_cpu_wide"] == pytest.approx(103 / 106) and s["share_cases_wide"] == pytest.approx(0.5)
+
+
+def test_cost_map_anchors_two_scenes_to_their_measured_cases(tmp_path):
+    """Two arms that are the same tree, whose measured cases differ by exactly 2x in CPU at every
+    point: the anchored ratio of their mean cost over the box is 2 with a bootstrap interval of
+    zero width, whatever the law's absolute seconds; every preset of the config is priced, with
+    the points inside the config's box."""
+    pts = [(0.3, 30, 65, 10), (0.45, 50, 55, 5), (0.3, 10, 75, 10)]
+    measured = tmp_path / "cases.csv"
+    with open(measured, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["arm", "point", "seed", "status", "f", "d_um", "h_um", "v_mm_s", "cpu_time"])
+        for i, p in enumerate(pts):
+            w.writerow(["slow", f"p{i}", 1, "ok", *p, 80.0 * (i + 1)])
+            w.writerow(["fast", f"p{i}", 1, "ok", *p, 40.0 * (i + 1)])
+    out = tmp_path / "map.json"
+    r = run("cost_map.py", "--points", 16, "--measured", measured, "--arm", f"slow={ROOT}", "--arm", f"fast={ROOT}",
+            "--boot", 200, "--json", out)
+    assert r.returncode == 0, r.stderr
+    import json
+
+    result = json.loads(out.read_text())
+    assert result["mean_ratio"]["ratio"] == pytest.approx(2.0)
+    assert result["mean_ratio"]["ci95"] == pytest.approx([2.0, 2.0])
+    presets = {row["preset"] for row in result["rows"] if row["arm"] == "slow"}
+    assert {"smoke", "fast", "default", "reference"} <= presets
+    law = [row for row in result["rows"] if row["scale"] == "law" and row["preset"] == "default"]
+    assert law[0]["mean"] == pytest.approx(law[1]["mean"])  # the same tree plans the same cases
+    assert 0 < law[0]["median"] <= law[0]["p90"] <= law[0]["max"]
