@@ -31,7 +31,20 @@ TARGETS: tuple[str, ...] = ("mfr", "pd")
 
 
 def bounds(ranges: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper bounds in NAMES order; `ranges` (config) overrides the defaults."""
+    """Lower and upper bounds in NAMES order; `ranges` (config) overrides the defaults.
+
+    Parameters
+    ----------
+    ranges : dict or None, optional
+        The config's ``ranges``: ``{name: {"min": ..., "max": ...}}`` in each parameter's unit
+        (f [-], d_um [um], h_um [um], v_mm_s [mm/s]); a name or a bound it leaves out keeps the
+        default of ``PARAMETERS``. None: the defaults.
+
+    Returns
+    -------
+    low, high : tuple of numpy.ndarray
+        Two float arrays of shape (4,), in NAMES order, in physical units.
+    """
     ranges = ranges or {}
     low = np.array([ranges.get(n, {}).get("min", BY_NAME[n].low) for n in NAMES], float)
     high = np.array([ranges.get(n, {}).get("max", BY_NAME[n].high) for n in NAMES], float)
@@ -39,12 +52,39 @@ def bounds(ranges: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
 
 
 def to_physical(unit_points: np.ndarray, ranges: dict | None = None) -> np.ndarray:
-    """Map points of the unit hypercube [0, 1]^4 to parameter values."""
+    """Map points of the unit hypercube [0, 1]^4 to parameter values.
+
+    Parameters
+    ----------
+    unit_points : numpy.ndarray
+        Points in [0, 1]^4, shape (n, 4) (or (4,)), columns in NAMES order.
+    ranges : dict or None, optional
+        The config's ``ranges`` (see ``bounds``); None: the defaults.
+
+    Returns
+    -------
+    numpy.ndarray
+        The points in physical units (f [-], d_um [um], h_um [um], v_mm_s [mm/s]), same shape.
+    """
     low, high = bounds(ranges)
     return low + np.asarray(unit_points, float) * (high - low)
 
 
 def to_unit(points: np.ndarray, ranges: dict | None = None) -> np.ndarray:
-    """Map parameter values to the unit hypercube (inverse of to_physical)."""
+    """Map parameter values to the unit hypercube (inverse of to_physical).
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        Points in physical units, shape (n, 4) (or (4,)), columns in NAMES order.
+    ranges : dict or None, optional
+        The config's ``ranges`` (see ``bounds``); None: the defaults.
+
+    Returns
+    -------
+    numpy.ndarray
+        The points scaled to [0, 1] per parameter (outside it for points outside the ranges),
+        same shape.
+    """
     low, high = bounds(ranges)
     return (np.asarray(points, float) - low) / (high - low)

@@ -21,9 +21,18 @@ class _Tee:
 
 
 def log_to(smk) -> None:
-    """Tee stdout and stderr into smk.log[0] (if the rule declares a log). A damaged file the job
-    reads (spreadmap.records.CorruptFileError) is moved aside and the job ends with one line, so
-    that the next run re-makes it."""
+    """Tee stdout and stderr into smk.log[0] (if the rule declares a log).
+
+    A damaged file the job reads (spreadmap.records.CorruptFileError) is moved aside and the job
+    ends with one line, so that the next run re-makes it (``spreadmap.records.remake_when_corrupt``
+    is installed as the job's ``sys.excepthook``).
+
+    Parameters
+    ----------
+    smk : snakemake.script.Snakemake
+        The ``snakemake`` object of a rule's script; only ``smk.log`` is read. Without a log
+        file, stdout and stderr are left as they are.
+    """
     from .records import remake_when_corrupt
 
     remake_when_corrupt()

@@ -46,7 +46,30 @@ def _text(path: Path, what: str) -> str:
 
 
 def read_json_object(path: Path | str, what: str, required=()) -> dict:
-    """A JSON object with the `required` keys, else CorruptFileError naming the file and why."""
+    """A JSON object with the `required` keys, else CorruptFileError naming the file and why.
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The JSON file.
+    what : str
+        What the file is, for the error message (e.g. "metrics record").
+    required : iterable of str, optional
+        Keys the object must have.
+
+    Returns
+    -------
+    dict
+        The parsed JSON object.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file is missing (missing is not corrupt).
+    CorruptFileError
+        If the file is empty, not UTF-8, not valid JSON (truncated or corrupted), not a JSON
+        object, or lacks a `required` key.
+    """
     path = Path(path)
     text = _text(path, what)
     try:
@@ -66,7 +89,27 @@ def read_json_object(path: Path | str, what: str, required=()) -> dict:
 
 
 def read_raw(path: Path | str) -> dict:
-    """A case's raw YADE record (raw.json / simulated.json)."""
+    """A case's raw YADE record (raw.json / simulated.json).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The record's file.
+
+    Returns
+    -------
+    dict
+        The record: a JSON object with at least ``format`` (starting "spreadmap-raw"),
+        ``status`` and ``params``.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file is missing.
+    CorruptFileError
+        If it is not such a record (see ``read_json_object``) or its format is not a raw
+        record's.
+    """
     raw = read_json_object(path, "raw YADE record", ("format", "status", "params"))
     if not str(raw["format"]).startswith(RAW_FORMAT):
         raise CorruptFileError(path, f"{path}: not a raw YADE record (format {raw['format']!r}); not read as data")
@@ -74,15 +117,53 @@ def read_raw(path: Path | str) -> dict:
 
 
 def read_metrics(path: Path | str) -> dict:
-    """A case's metrics record (metrics.json)."""
+    """A case's metrics record (metrics.json).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The record's file.
+
+    Returns
+    -------
+    dict
+        The record: a JSON object with at least ``case_id`` and ``status``.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file is missing.
+    CorruptFileError
+        If it is not a whole metrics record (see ``read_json_object``).
+    """
     return read_json_object(path, "metrics record", ("case_id", "status"))
 
 
 def read_table(path: Path | str):
-    """A CSV table the workflow wrote (pandas `to_csv`): refused if it does not end with a line
-    break or a row's field count differs from the header's (a table cut off mid-row); else what
-    pd.read_csv reads from it. A table cut exactly at a line break has whole rows and passes:
-    the atomic writer is what rules that out."""
+    """A CSV table the workflow wrote (pandas `to_csv`), refused if damaged.
+
+    Refused if it does not end with a line break or a row's field count differs from the
+    header's (a table cut off mid-row); else what pd.read_csv reads from it. A table cut exactly
+    at a line break has whole rows and passes: the atomic writer is what rules that out.
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The CSV file.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The table as ``pd.read_csv`` reads it.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file is missing.
+    CorruptFileError
+        If the file is empty, not UTF-8, does not end with a line break, has a row whose field
+        count differs from the header's, or is not CSV.
+    """
     path = Path(path)
     text = _text(path, "table")
     if not text.endswith("\n"):

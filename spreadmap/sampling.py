@@ -39,12 +39,49 @@ def _table(unit: np.ndarray, ranges: dict | None) -> pd.DataFrame:
 
 
 def halton(n: int, seed: int, ranges: dict | None = None) -> pd.DataFrame:
-    """LDS sample table: columns index, f, d_um, h_um, v_mm_s."""
+    """LDS sample table: columns index, f, d_um, h_um, v_mm_s.
+
+    The first `n` points of the seeded scrambled Halton sequence (``halton_unit``), so the table
+    for n is a prefix of the table for 2n.
+
+    Parameters
+    ----------
+    n : int
+        Number of points (rows).
+    seed : int
+        Seed of the scrambling (``scipy.stats.qmc.Halton``).
+    ranges : dict or None, optional
+        The config's ``ranges`` (``spreadmap.design.bounds``); None: the default ranges.
+
+    Returns
+    -------
+    pandas.DataFrame
+        `n` rows: ``index`` (0 .. n-1, the position in the sequence) then the four parameters
+        in physical units.
+    """
     return _table(halton_unit(n, seed), ranges)
 
 
 def lattice(k: int, ranges: dict | None = None) -> pd.DataFrame:
-    """Uniform lattice sample table with k points per dimension (k^4 rows)."""
+    """Uniform lattice sample table with k points per dimension (k^4 rows).
+
+    Parameters
+    ----------
+    k : int
+        Points per dimension, end points included (k >= 2).
+    ranges : dict or None, optional
+        The config's ``ranges`` (``spreadmap.design.bounds``); None: the default ranges.
+
+    Returns
+    -------
+    pandas.DataFrame
+        k^4 rows: ``index`` then the four parameters in physical units.
+
+    Raises
+    ------
+    ValueError
+        If ``k < 2``.
+    """
     return _table(lattice_unit(k), ranges)
 
 

@@ -59,9 +59,30 @@ def set_summary(table: pd.DataFrame, rules: dict | None = None) -> dict:
 
 
 def run_summary(tables: dict[str, pd.DataFrame], rules: dict | None = None, floor: str | None = None) -> dict:
-    """Per set and over the distinct cases; with `rules` (the config's `regime`), the rule is said
-    and labels that differ from it are counted (stale_regime_labels); with `floor`
-    (spreadmap.case.substrate.floor_label), the floor the cases ran on is named."""
+    """The run summary: per set of cases and over the distinct cases.
+
+    With `rules` (the config's `regime`), the rule is said and labels that differ from it are
+    counted (stale_regime_labels); with `floor` (spreadmap.case.substrate.floor_label), the floor
+    the cases ran on is named.
+
+    Parameters
+    ----------
+    tables : dict of str to pandas.DataFrame
+        Set name (e.g. a sweep) -> its results table; a case in several sets counts once in
+        ``all`` (by ``case_id``).
+    rules : dict or None, optional
+        The config's `regime` section; None: the regime labels are not checked.
+    floor : str or None, optional
+        The floor the cases ran on.
+
+    Returns
+    -------
+    dict
+        ``sets`` (per set: ``cases``, ``done``, ``failed``, ``status_counts``, ``flagged``,
+        ``usable``, ``regimes``, ``problems``, ``wall_time_s`` median/max/total [s],
+        ``peak_memory_mb`` [MB] and, with `rules`, ``stale_regime_labels``), ``unique_cases``,
+        ``floor`` and ``regime_rule`` (when given) and ``all`` (the same over the distinct cases).
+    """
     sets = {name: set_summary(t, rules) for name, t in tables.items()}
     filled = [t for t in tables.values() if len(t)]
     unique = pd.concat(filled, ignore_index=True) if filled else pd.DataFrame()
@@ -74,6 +95,19 @@ def run_summary(tables: dict[str, pd.DataFrame], rules: dict | None = None, floo
 
 
 def summary_text(summary: dict) -> str:
+    """The run summary as lines a user reads (the log's and the summary file's text).
+
+    Parameters
+    ----------
+    summary : dict
+        The result of ``run_summary``.
+
+    Returns
+    -------
+    str
+        One line per set and for the distinct cases, then the cases failed or flagged with their
+        reasons; ends with a line break.
+    """
     lines = [f"spreadmap run summary: {summary['unique_cases']} distinct cases"]
     if "floor" in summary:
         lines.append(f"  floor: {summary['floor']}")

@@ -33,7 +33,20 @@ def flagged(table: pd.DataFrame) -> np.ndarray:
 
 def usable(table: pd.DataFrame) -> np.ndarray:
     """Rows fit for statistics and training: finished (status ok) and not flagged by a stability
-    bound. Columns that are absent impose nothing."""
+    bound.
+
+    Columns that are absent impose nothing.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The results table (one row per case); ``status`` and ``flagged`` are read if present.
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean mask, one entry per row of `table`.
+    """
     ok = ~flagged(table)
     if "status" in table.columns:
         ok &= (table["status"] == "ok").to_numpy()
@@ -50,8 +63,33 @@ def read_benchmark(path: Path | str) -> dict:
 
 
 def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFrame:
-    """labels[i] = {"sweep": ..., "index": ...} for metrics_files[i]. A metrics file that is not a
-    whole metrics record raises spreadmap.records.CorruptFileError naming it."""
+    """The results table of the cases' metrics records, one row per case.
+
+    labels[i] = {"sweep": ..., "index": ...} for metrics_files[i]. A metrics file that is not a
+    whole metrics record raises spreadmap.records.CorruptFileError naming it.
+
+    Parameters
+    ----------
+    metrics_files : sequence of pathlib.Path or str
+        The cases' metrics.json files.
+    benchmark_files : sequence of pathlib.Path or str
+        Snakemake's benchmark file of each case's YADE run, same order; one that cannot be read
+        gives NaN wall time (``benchmark_s``, s) and peak memory (``max_rss_mb``, MB).
+    labels : list of dict
+        Columns to add to each row, same order: ``{"sweep": ..., "index": ...}``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``FIRST_COLUMNS`` first, the other columns of the records, then the noise and layer
+        columns and (where the records name their floor) ``FLOOR_COLUMNS`` with the effective
+        gap. With no files: an empty table with ``FIRST_COLUMNS``.
+
+    Raises
+    ------
+    spreadmap.records.CorruptFileError
+        If a metrics file is not a whole metrics record.
+    """
     rows = []
     for mfile, bfile, label in zip(metrics_files, benchmark_files, labels):
         row = read_metrics(mfile)  # a truncated or damaged record: CorruptFileError, never a row
@@ -79,5 +117,19 @@ def with_effective_gap(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def write_table(table: pd.DataFrame, path: Path | str) -> None:
+    """Write a table as CSV (no index column), atomically (``spreadmap.files.atomic_path``).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The table to write.
+    path : pathlib.Path or str
+        The CSV file; replaced whole or not at all (its folder is made if missing).
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written; a full disk or a file-size limit names `path`.
+    """
     with atomic_path(path) as tmp:
         table.to_csv(tmp, index=False)

@@ -265,8 +265,31 @@ def explorer_html(data: dict, n_cases: int) -> str:
 
 def write_explorer(model, dec: dict, support: dict, path, csv=None, floor: str | None = None) -> dict:
     """Write the page (and, given ``csv``, its numbers as a table); return the page's data.
-    ``floor``: the floor the model's cases ran on (spreadmap.case.substrate.floor_label), named on the
-    page and in the table."""
+
+    Parameters
+    ----------
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate (``load_model``), evaluated at every grid point of the sliders and
+        axes.
+    dec : dict
+        The ``decisions:`` config with defaults (``decision_config``): its ``explorer`` grid
+        sizes, ``bounds``, ``quality``, ``confidence`` and ``about``.
+    support : dict
+        The maps' support rule (``map_config(...)["support"]``).
+    path : pathlib.Path or str
+        The HTML file to write (self-contained; written atomically).
+    csv : pathlib.Path or str or None, optional
+        Where to write the page's numbers as CSV (one row per grid point); None: not written.
+    floor : str or None, optional
+        The floor the model's cases ran on (spreadmap.case.substrate.floor_label), named on the
+        page and in the table.
+
+    Returns
+    -------
+    dict
+        The page's data (``explorer_data`` plus ``floor``): the axis values ``f``, ``d``, ``h``,
+        ``v``, the ``targets``, their means and SDs, ``probability``, ``beyond`` and ``region``.
+    """
     data = {**explorer_data(model, dec, support), "floor": floor}
     write_text_atomically(path, explorer_html(data, len(model.train_X)))
     if csv is not None:

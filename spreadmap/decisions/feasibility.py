@@ -77,6 +77,19 @@ class Powder:
 
 
 def powders_from_config(dec: dict) -> list[Powder]:
+    """The powders of the ``decisions:`` config, in its order.
+
+    Parameters
+    ----------
+    dec : dict
+        The ``decisions:`` config with defaults (``decision_config``); its ``powders`` maps a
+        name to ``f`` [-] and ``d_um`` [um], each one value or a [low, high] range.
+
+    Returns
+    -------
+    list of Powder
+        One per powder, f and d_um as (low, high) (low == high for one value).
+    """
     return [Powder(name, span(spec["f"]), span(spec["d_um"])) for name, spec in dec["powders"].items()]
 
 
@@ -238,7 +251,40 @@ def _note(row: dict, powder: Powder, confidence: float, best_inside: float, qual
 
 def recommendations(model, dec: dict, support: dict) -> tuple[pd.DataFrame, dict]:
     """The recommendation table of every powder of ``dec`` (the ``decisions:`` config with
-    defaults) and each powder's feasibility grid (name -> DataFrame)."""
+    defaults) and each powder's feasibility grid (name -> DataFrame).
+
+    See the module docstring for what meeting a bound means, the powder ranges, the settings
+    beyond the data and the two recommendations (fastest, best quality).
+
+    Parameters
+    ----------
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate (``load_model``): its targets, design space, cases and joint
+        posterior draws are used.
+    dec : dict
+        The ``decisions:`` config with defaults (``decision_config``).
+    support : dict
+        The maps' support rule (``map_config(...)["support"]``): ``max_distance`` (case
+        spacings) and ``max_sd_ratio`` (model SD over a run's noise SD).
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        Two rows per powder (``kind`` fastest and best_quality, or more where a better setting
+        lies beyond the data): ``powder``, ``kind``, ``status`` (one of STATUSES),
+        ``recommended``, ``h_um`` [um], ``v_mm_s`` [mm/s], ``probability``, ``confidence``,
+        ``about``, ``best_probability_in_data``, ``quality_target``, ``quality``,
+        ``beyond_data``, ``data_distance``, ``sd_ratio``, the powder's range, the bounded
+        targets' mean ranges and a ``note`` to read.
+    grids : dict of str to pandas.DataFrame
+        Each powder's ``feasibility`` grid (one row per (h, v) setting).
+
+    Raises
+    ------
+    DecisionError
+        If the model cannot answer the config: a bounded or quality target it lacks, machine
+        ranges outside its design space, a powder outside its design space or its data.
+    """
     powders = powders_from_config(dec)
     check_inputs(model, dec, powders)
     h, v = setting_grid(dec)

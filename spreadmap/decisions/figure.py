@@ -35,8 +35,30 @@ def bounds_text(bounds: dict) -> str:
 def decision_figure(grids: dict, table: pd.DataFrame, powders, dec: dict, support: dict, stem,
                     floor: str | None = None):
     """Draw and save (PNG, PDF, and the grids as CSV) the probability maps with the recommendations.
-    ``grids``: powder name -> ``feasibility`` frame; ``table``: ``recommendations``' table; ``floor``:
-    the floor the surrogate's cases were spread on (spreadmap.case.substrate.floor_label)."""
+
+    Parameters
+    ----------
+    grids : dict of str to pandas.DataFrame
+        Powder name -> ``feasibility`` frame (the second value of ``recommendations``).
+    table : pandas.DataFrame
+        ``recommendations``' table.
+    powders : sequence of Powder
+        The powders, one panel each, in this order (``powders_from_config``).
+    dec : dict
+        The ``decisions:`` config with defaults (``confidence``, ``about`` and ``bounds`` are
+        read).
+    support : dict
+        The maps' support rule (``map_config(...)["support"]``), stated in the title.
+    stem : pathlib.Path or str
+        Where to save: ``<stem>.png``, ``.pdf`` and ``.csv``.
+    floor : str or None, optional
+        The floor the surrogate's cases were spread on (spreadmap.case.substrate.floor_label).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     n = len(powders)
     cols = min(n, 3)
     rows = -(-n // cols)

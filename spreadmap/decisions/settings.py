@@ -14,7 +14,24 @@ class DecisionError(ValueError):
 
 
 def decision_config(config: Mapping | None = None) -> dict:
-    """The ``decisions:`` section validated against the schema, defaults filled."""
+    """The ``decisions:`` section validated against the schema, defaults filled.
+
+    Parameters
+    ----------
+    config : Mapping or None, optional
+        The config's ``decisions:`` section; None or empty: all defaults.
+
+    Returns
+    -------
+    dict
+        A copy with the schema's defaults filled in (``powders``, ``machine``, ``bounds``,
+        ``quality``, ``confidence``, ``about``, ``draws``, ...).
+
+    Raises
+    ------
+    ValueError
+        If the section breaks the schema (schemas/config.schema.yaml); the message names the key.
+    """
     return checked("decisions", config)
 
 

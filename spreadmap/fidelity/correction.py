@@ -41,7 +41,28 @@ def usable(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def pairs(table: pd.DataFrame, preset: str, reference: str, targets=TARGETS) -> pd.DataFrame:
-    """One row per (point name, seed) run usable at both presets: l and v per target, h/d, CPU."""
+    """One row per (point name, seed) run usable at both presets: l and v per target, h/d, CPU.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The paired cases' results table: ``preset``, ``name``, ``seed``, ``status`` (and
+        ``flagged``), the four parameters, ``cpu_time`` [s] and, per target, its value and its
+        stated noise SD ``<t>_sd``.
+    preset : str
+        The preset to correct.
+    reference : str
+        The preset it is corrected to.
+    targets : sequence of str, optional
+        The targets.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Sorted by h/d, name and seed: ``name``, ``seed``, the four parameters, ``h_over_d``,
+        ``cpu_preset`` and ``cpu_ref`` [s] and per target ``<t>_preset``, ``<t>_ref``, ``<t>_l``
+        (ln(reference / preset)) and ``<t>_v`` (its noise variance).
+    """
     keep = ["name", "seed", "f", "d_um", "h_um", "v_mm_s", "cpu_time"] + [c for t in targets for c in (t, f"{t}_sd")]
     a = usable(table[table["preset"] == preset])[keep]
     b = usable(table[table["preset"] == reference])[["name", "seed", "cpu_time"] + [c for t in targets for c in (t, f"{t}_sd")]]
@@ -103,7 +124,29 @@ def slope_on_gap(points: pd.DataFrame) -> tuple[float, float]:
 
 
 def correction(table: pd.DataFrame, preset: str = "default", reference: str = "reference", targets=TARGETS) -> dict:
-    """Per target: the factor for a map (exp(mu)), its SD at a point not run, and the evidence."""
+    """Per target: the factor for a map (exp(mu)), its SD at a point not run, and the evidence.
+
+    See the module docstring for the prediction interval of a new point and why it is used.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The paired cases' results table (see ``pairs``).
+    preset : str, optional
+        The preset to correct.
+    reference : str, optional
+        The preset it is corrected to.
+    targets : sequence of str, optional
+        The targets.
+
+    Returns
+    -------
+    dict
+        ``preset``, ``reference``, ``pairs``, ``points``, ``cpu_ratio`` (reference CPU over the
+        preset's) and ``targets``: per target the ``factor`` (exp(m)), its ``sd`` at a point not
+        run, ``new_point_95`` and ``mean_95`` intervals, ``random_effects`` (DerSimonian-Laird:
+        mu, se, tau, Cochran's q, dof, q_p), ``slope_ln_hd`` and ``slope_se``, and ``per_point``.
+    """
     p = pairs(table, preset, reference, targets)
     out = {"preset": preset, "reference": reference, "pairs": int(len(p)), "points": int(p["name"].nunique()),
            "cpu_ratio": float(p["cpu_ref"].sum() / p["cpu_preset"].sum()) if len(p) else float("nan"), "targets": {}}
@@ -124,6 +167,22 @@ def correction(table: pd.DataFrame, preset: str = "default", reference: str = "r
 
 
 def config_block(result: dict, source: str, floor: str | None = None) -> dict:
-    """The `fidelity_correction` config section of a result (``floor``: scene.substrate.kind of its cases)."""
+    """The `fidelity_correction` config section of a result (``floor``: scene.substrate.kind of its cases).
+
+    Parameters
+    ----------
+    result : dict
+        The result of ``correction``.
+    source : str
+        Where the result comes from, written as the section's ``source``.
+    floor : str or None, optional
+        scene.substrate.kind of its cases; None: no ``floor`` key.
+
+    Returns
+    -------
+    dict
+        ``preset``, ``reference``, ``floor`` (if given), ``source`` and ``targets``: per target
+        its ``factor`` and ``sd``, rounded to 4 decimals.
+    """
     return {"preset": result["preset"], "reference": result["reference"], **({"floor": floor} if floor else {}), "source": source,
             "targets": {t: {"factor": round(v["factor"], 4), "sd": round(v["sd"], 4)} for t, v in result["targets"].items()}}

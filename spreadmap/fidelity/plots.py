@@ -30,7 +30,23 @@ def pareto_front(cost: np.ndarray, error: np.ndarray) -> np.ndarray:
 def pareto_figure(presets: pd.DataFrame, reference: str, path_stem) -> dict:
     """Mean relative error of MFR and PD against the reference (over the points) versus the median
     CPU time per case; bars are the resolution of that error (2 standard errors of the seed means).
-    Dashes mark each preset's noise floor; hollow markers are errors within the noise."""
+
+    Dashes mark each preset's noise floor; hollow markers are errors within the noise.
+
+    Parameters
+    ----------
+    presets : pandas.DataFrame
+        The per-preset table of ``spreadmap.fidelity.study.preset_errors`` (also the CSV saved).
+    reference : str
+        The reference preset (a row of `presets`; drawn at error 0).
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     fig = new_figure(7.5, 4.8)
     ax = fig.add_subplot()
     others = presets[presets["preset"] != reference].reset_index(drop=True)
@@ -75,7 +91,22 @@ def pareto_figure(presets: pd.DataFrame, reference: str, path_stem) -> dict:
 
 def knobs_figure(knobs: pd.DataFrame, base_preset: str, path_stem) -> dict:
     """One panel per knob: MFR and PD (seed mean, bar = seed SD) against the knob value, the base
-    preset's value marked, the cost relative to it written above each value."""
+    preset's value marked, the cost relative to it written above each value.
+
+    Parameters
+    ----------
+    knobs : pandas.DataFrame
+        The table of ``spreadmap.fidelity.study.knob_errors`` (also the CSV saved).
+    base_preset : str
+        The preset the knobs were varied from, named in the title.
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     names = list(dict.fromkeys(knobs["knob"]))
     ncols = min(3, len(names))
     nrows = int(np.ceil(len(names) / ncols))
@@ -107,7 +138,26 @@ def knobs_figure(knobs: pd.DataFrame, base_preset: str, path_stem) -> dict:
 
 def correction_figure(result: dict, pairs: pd.DataFrame, path_stem, floor: str | None = None) -> dict:
     """Per target (spreadmap.fidelity.correction): each pair's and each point's reference / preset
-    against h/d, the factor the maps take and its 95 % interval at a point not run."""
+    against h/d, the factor the maps take and its 95 % interval at a point not run.
+
+    Parameters
+    ----------
+    result : dict
+        The result of ``spreadmap.fidelity.correction.correction``.
+    pairs : pandas.DataFrame
+        The pairs it was computed from (``spreadmap.fidelity.correction.pairs``; also the CSV
+        saved).
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+    floor : str or None, optional
+        The floor the cases ran on (spreadmap.case.substrate.floor_label), named on the figure
+        and in the CSV.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     targets = list(result["targets"])
     fig = new_figure(5.2 * len(targets), 4.2)
     axes = fig.subplots(1, len(targets), squeeze=False)[0]

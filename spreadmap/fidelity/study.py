@@ -115,7 +115,33 @@ def verdict(rel_error: float, rel_resolution: float) -> str:
 
 
 def preset_errors(table: pd.DataFrame, reference: str) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """(per point and preset, per preset) errors against `reference`, spreads and costs."""
+    """(per point and preset, per preset) errors against `reference`, spreads and costs.
+
+    Errors are differences of seed means with their standard errors (see the module docstring);
+    costs are the YADE process's CPU time (one core), wall time beside it.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The fidelity study's results table: one row per case, with ``preset``, ``name`` (the
+        point), ``status``/``flagged``, ``mfr``, ``pd``, ``cpu_time`` and ``wall_time`` [s],
+        ``n_particles``, ``steps`` and ``peak_overlap_ratio`` (``peak_overlap_free``, ``wedged``
+        and ``n_passed`` are used when present).
+    reference : str
+        The preset the others are compared with.
+
+    Returns
+    -------
+    per_point : pandas.DataFrame
+        One row per (preset, point): seed means, seed SDs (ddof = 1) and counts of MFR and PD,
+        costs, and the error against the reference's same point (``<t>_error``,
+        ``<t>_rel_error``, ``<t>_se``, ``<t>_rel_resolution``, ``<t>_resolved``).
+    presets : pandas.DataFrame
+        One row per preset: the mean |relative error| over the points, its noise floor, the
+        chi-square test (``<t>_chi2``, ``<t>_chi2_p``), ``<t>_verdict``, the seeds that would
+        resolve 5 %, CPU and wall seconds (median, max, total), ``cost_ratio_to_reference``,
+        particle-steps per CPU second and flagged cases.
+    """
     per_point = compare(stats := seed_statistics(table, ["preset", "name"]), stats[stats["preset"] == reference], ["name"])
     rows = []
     ref_cpu = table.loc[table["preset"] == reference, "cpu_time"].sum()
@@ -145,7 +171,22 @@ def preset_errors(table: pd.DataFrame, reference: str) -> tuple[pd.DataFrame, pd
 
 def knob_errors(table: pd.DataFrame) -> pd.DataFrame:
     """Per knob and value: MFR and PD, their seed spread, the error against the base value and the
-    cost relative to it."""
+    cost relative to it.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The one-knob-at-a-time results table: one row per case, with ``knob``, ``value``,
+        ``is_base`` (the base preset's own value of the knob), ``preset``, ``status``/``flagged``,
+        ``mfr``, ``pd``, ``cpu_time`` and ``wall_time`` [s], ``n_particles`` and ``steps``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (knob, value), sorted by knob then value: seed statistics, the error against
+        the knob's base value (as in ``preset_errors``), ``cost_ratio_to_base`` (mean CPU over
+        the base's) and ``<t>_verdict``.
+    """
     stats = seed_statistics(table, ["knob", "value", "is_base", "preset"])
     out = compare(stats, stats[stats["is_base"]], ["knob"])
     base_cpu = out[out["is_base"]].set_index("knob")["cpu_s_mean"]
@@ -158,11 +199,39 @@ def knob_errors(table: pd.DataFrame) -> pd.DataFrame:
 
 def goal(presets: pd.DataFrame, candidate: str, max_rel_error: float = 0.05, min_cost_ratio: float = 20.0,
          max_median_cpu_s: float = 20.0) -> dict:
-    """The goal for one preset (overall "met", "not met" when a check is resolved as missed, else
-    "not resolved"): within `max_rel_error` of the reference on MFR and PD (mean
-    over the points), `min_cost_ratio` times cheaper, median CPU per case <= `max_median_cpu_s`.
-    Accuracy is "met" only when the measured error plus its resolution is below the bound, "not
-    met" when the error minus its resolution is above it, and otherwise "not resolved"."""
+    """The goal for one preset: "met", "not met" when a check is resolved as missed, else "not
+    resolved".
+
+    The goal: within `max_rel_error` of the reference on MFR and PD (mean over the points),
+    `min_cost_ratio` times cheaper, median CPU per case <= `max_median_cpu_s`. Accuracy is "met"
+    only when the measured error plus its resolution is below the bound, "not met" when the error
+    minus its resolution is above it, and otherwise "not resolved".
+
+    Parameters
+    ----------
+    presets : pandas.DataFrame
+        The per-preset table of ``preset_errors``.
+    candidate : str
+        The preset whose goal is checked.
+    max_rel_error : float, optional
+        Bound on the mean |relative error| of MFR and of PD (0.05 = 5 %).
+    min_cost_ratio : float, optional
+        How many times cheaper (total CPU) than the reference the preset must be.
+    max_median_cpu_s : float, optional
+        Bound on the median CPU time per case [s].
+
+    Returns
+    -------
+    dict
+        ``preset``, the three bounds, ``checks`` (per check: the measured value, its ``state``
+        and ``met``; the accuracy checks add ``resolution``, ``noise_floor`` and
+        ``seeds_for_5pct``), the overall ``state`` and ``met``.
+
+    Raises
+    ------
+    KeyError
+        If `candidate` is not a preset of `presets`.
+    """
     row = presets.set_index("preset").loc[candidate]
     checks = {}
     for t in TARGETS:
@@ -195,7 +264,26 @@ def _pct(x: float) -> str:
 
 def markdown_summary(presets: pd.DataFrame, per_point: pd.DataFrame, knobs: pd.DataFrame | None,
                      reference: str, goals: list[dict]) -> str:
-    """The study's tables as Markdown (for the README and for people)."""
+    """The study's tables as Markdown (for the README and for people).
+
+    Parameters
+    ----------
+    presets : pandas.DataFrame
+        The per-preset table of ``preset_errors``.
+    per_point : pandas.DataFrame
+        The per-point table of ``preset_errors``.
+    knobs : pandas.DataFrame or None
+        The table of ``knob_errors``; None or empty: no knob section.
+    reference : str
+        The reference preset.
+    goals : list of dict
+        Results of ``goal``, one section each.
+
+    Returns
+    -------
+    str
+        The Markdown text, ending with a line break.
+    """
     lines = [f"### Presets against `{reference}`", "",
              "Error: mean over the points of |seed mean - reference seed mean| / reference seed mean. "
              "\"Within noise\" when a chi-square test of the points' errors against their standard errors "
@@ -247,7 +335,19 @@ def markdown_summary(presets: pd.DataFrame, per_point: pd.DataFrame, knobs: pd.D
 
 
 def machine_description(table: pd.DataFrame) -> dict:
-    """Where and when the numbers were measured, with the YADE versions of the cases."""
+    """Where and when the numbers were measured, with the YADE versions of the cases.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The cases' results table (its ``yade_version`` column is read if present).
+
+    Returns
+    -------
+    dict
+        ``spreadmap.machine.description()`` (this machine, now) plus ``yade``: the sorted
+        distinct YADE versions of the cases.
+    """
     from ..machine import description
 
     versions = sorted(set(table.get("yade_version", pd.Series(dtype=str)).dropna().astype(str)))

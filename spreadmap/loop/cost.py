@@ -45,7 +45,27 @@ def planned_work(points: np.ndarray, config: Mapping, preset: str) -> np.ndarray
 
 @dataclass
 class PlannedCost:
-    """cost(X) -> CPU seconds of cases at physical points X, from the scene's plan and the law."""
+    """cost(X) -> CPU seconds of cases at physical points X, from the scene's plan and the law.
+
+    CPU [s] = exp(ln_a) * N^b_particles * S^b_steps, with N the spheres and S the estimated steps
+    that ``case.scene.scene_parameters`` plans for the case (see the module's docstring for why
+    a law of the plan and not of this run's clock). Calling the instance on points X (shape
+    (n, 4), physical units, ``design.NAMES`` order) returns their CPU seconds, shape (n,).
+
+    Parameters
+    ----------
+    config : Mapping
+        The workflow's config (the scene's settings and presets are read from it).
+    preset : str
+        The preset whose scene plans the cases.
+    ln_a : float, optional
+        Natural log of the law's scale (ln of seconds); the default is fitted on the published
+        cases (docs/replay/cost_law.json).
+    b_particles : float, optional
+        Exponent of the sphere count N (dimensionless).
+    b_steps : float, optional
+        Exponent of the estimated steps S (dimensionless).
+    """
 
     config: Mapping
     preset: str
@@ -55,11 +75,38 @@ class PlannedCost:
 
     @classmethod
     def from_config(cls, config: Mapping, preset: str | None = None) -> "PlannedCost":
+        """The law of ``config["converge"]["cost_law"]`` (keys left out keep ``DEFAULT_LAW``).
+
+        Parameters
+        ----------
+        config : Mapping
+            The workflow's config.
+        preset : str or None, optional
+            The preset whose scene plans the cases; None: ``config["preset"]``.
+
+        Returns
+        -------
+        PlannedCost
+            The cost of cases of that preset under that law.
+        """
         law = {**DEFAULT_LAW, **dict((config.get("converge") or {}).get("cost_law") or {})}
         return cls(config, preset or config["preset"], float(law["ln_a"]), float(law["b_particles"]),
                    float(law["b_steps"]))
 
     def of_work(self, work: np.ndarray) -> np.ndarray:
+        """CPU seconds of cases of known planned work, by the law.
+
+        Parameters
+        ----------
+        work : numpy.ndarray
+            Shape (n, 2): the sphere count N and the estimated steps S of each case
+            (``planned_work``).
+
+        Returns
+        -------
+        numpy.ndarray
+            CPU seconds, shape (n,).
+        """
         work = np.asarray(work, float)
         return np.exp(self.ln_a + self.b_particles * np.log(work[:, 0]) + self.b_steps * np.log(work[:, 1]))
 
@@ -68,7 +115,19 @@ class PlannedCost:
 
     def calibrated(self, table: pd.DataFrame) -> "PlannedCost":
         """The same law with ``ln_a`` set so that its median ratio to the finished cases' measured
-        ``cpu_time`` is 1 (this machine's speed); unchanged with none finished."""
+        ``cpu_time`` is 1 (this machine's speed); unchanged with none finished.
+
+        Parameters
+        ----------
+        table : pandas.DataFrame
+            A results table; its rows with status ok and a ``cpu_time`` (s) > 0 are used.
+
+        Returns
+        -------
+        PlannedCost
+            A new cost with the calibrated ``ln_a`` (the same exponents), or `self` when no row
+            qualifies.
+        """
         X, cpu = finished_costs(table)
         if not len(cpu):
             return self

@@ -113,7 +113,24 @@ def loop_kind(cfg: Mapping) -> str:
 
 def make_map_fit(surrogate_cfg: Mapping | None = None, final: bool = False) -> FitFunction:
     """``fit(X, y, noise_sd=None) -> SurrogateMapModel``: the surrogate's map model of one target
-    (``final``: with the final fit's optimizer restarts, as the model the maps are drawn from)."""
+    (``final``: with the final fit's optimizer restarts, as the model the maps are drawn from).
+
+    Parameters
+    ----------
+    surrogate_cfg : Mapping or None, optional
+        The config's ``surrogate:`` section (schema defaults filled in); its ``model`` picks the
+        kind (``gp`` or ``mlp``; ``best`` fits the GP, see ``loop_kind``).
+    final : bool, optional
+        Fit with the final fit's optimizer restarts instead of the loop's.
+
+    Returns
+    -------
+    FitFunction
+        ``fit(X, y, noise_sd=None)``: X shape (n, 4) in physical units and ``design.NAMES``
+        order, y shape (n,) in the target's units, noise_sd the per-case noise SD (same units)
+        or None; returns a ``SurrogateMapModel``. It raises ValueError if the shapes do not match,
+        if n < 3, or if noise_sd is not finite, >= 0 and one per case.
+    """
     from ..surrogate.models import make_model
 
     cfg = surrogate_settings(surrogate_cfg)

@@ -22,7 +22,22 @@ CRITERION_LABELS = {"map_error": "map error / tolerance (the larger of CV net of
 
 def plot_converge_path(record: Mapping, path_stem) -> dict[str, Path]:
     """Each map criterion's value (ratio to its threshold: <= 1 holds) at every batch, the
-    study's rule (its largest change / its tolerance) beside them, and why the run stopped."""
+    study's rule (its largest change / its tolerance) beside them, and why the run stopped.
+
+    Parameters
+    ----------
+    record : Mapping
+        The last step record of ``snakemake converge`` (``spreadmap.loop.stepper.step``): its
+        ``criteria`` (``path``, ``stop_on``), ``study_rule_path``, ``study_rule_tolerance``,
+        ``reason`` and ``n`` are read.
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv`` (the ratios plotted).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     path = record["criteria"]["path"]
     rows = []
     for h in path:

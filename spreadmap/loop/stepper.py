@@ -98,12 +98,58 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
          tolerance: float = 0.005, floors: Mapping | None = None,
          cost: Callable[[np.ndarray], np.ndarray] | None = None,
          models_out: dict | None = None) -> dict[str, Any]:
-    """The decision after ``n`` cases (``table``: their rows in run order, the previous step's
-    ``n_prev`` cases first).  ``fit``: the map model's fit function (default: the surrogate's,
-    default config); ``cost``: planned CPU seconds of cases at physical points (``cost.PlannedCost``),
-    needed by ``acquisition: ivr_per_cpu`` and used for the CPU budget; ``models_out``: a dict
-    that receives the fitted map models by target.  Returns the JSON-ready step record (see the
-    module docstring)."""
+    """The decision after ``n`` cases: stop, or the next batch (see the module docstring).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The results table's rows of the ``n`` cases, in run order, the previous step's ``n_prev``
+        cases first.
+    n : int
+        Number of cases run; must equal ``len(table)``.
+    cfg : Mapping or None
+        The config's ``converge:`` section (``STEP_DEFAULTS`` and the map criteria's defaults for
+        what it leaves out).
+    prev_step : Mapping or None, optional
+        The previous step's record (its ``n``, ``is_lds``, criteria path and study-rule path);
+        None for the first step (every case then counts as LDS).
+    fit : FitFunction or None, optional
+        The map model's fit function (``model.make_map_fit``); default: the surrogate's, default
+        config.
+    ranges : dict or None, optional
+        The config's ``ranges`` (``design.bounds``) for the map grids, the LDS points and the
+        candidates.
+    maps_cfg : Mapping or None, optional
+        The config's ``maps:`` section, for the grids the map change is measured on.
+    lds_seed : int, optional
+        Seed of the LDS sequence the start and the LDS shares continue.
+    targets : sequence of str, optional
+        The targets modelled (results table columns).
+    tolerance : float, optional
+        The study's rule's tolerance (relative change between batches, 0.005 = 0.5 %).
+    floors : Mapping or None, optional
+        Per-target absolute floors of the study's rule (``study_rule.rule``), or None.
+    cost : callable or None, optional
+        Planned CPU seconds of cases at physical points X[n, 4] (``cost.PlannedCost``); needed by
+        ``acquisition: ivr_per_cpu`` and used for the CPU budget (without it, the measured CPU
+        decides the budget).
+    models_out : dict or None, optional
+        A dict that receives the fitted map models by target.
+
+    Returns
+    -------
+    dict
+        The JSON-ready step record: ``n``, ``usable``, ``cpu_hours`` and ``cpu_hours_modelled``
+        (CPU h), ``stop`` and ``reason``, ``criteria``, ``study_rule`` and its path, ``next_n`` and
+        ``next_batch`` (the next points, physical units), ``is_lds``, ``settings`` and ``summary``.
+
+    Raises
+    ------
+    ValueError
+        If a ``converge:`` setting is not allowed, ``len(table) != n``, a map-error tolerance
+        names a target not in `targets`, ``ivr_per_cpu`` is asked for without `cost`, or the
+        previous step lists another number of cases.
+    """
     s = step_settings(cfg)
     crit = s["criteria"]
     if len(table) != n:
@@ -214,5 +260,23 @@ def describe(record: Mapping[str, Any]) -> str:
 
 def step_number(path: Path | str) -> int:
     """N of a step record's file name, results/converge/step_{N}.json (to order records by N,
-    not as text: step_96 before step_112)."""
+    not as text: step_96 before step_112).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        A step record's path (only its name is read).
+
+    Returns
+    -------
+    int
+        The N after the last underscore of the file's stem.
+
+    Raises
+    ------
+    IndexError
+        If the stem has no underscore.
+    ValueError
+        If what follows the last underscore is not an integer.
+    """
     return int(Path(path).stem.rsplit("_", 1)[1])

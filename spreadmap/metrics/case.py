@@ -111,7 +111,33 @@ def flow_fall_reason(trend: float, trend_z: float, heap_end_h2: float, heap_min:
 
 def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict) -> dict:
     """Everything the results table needs from one raw record (ok, blown or failed).
-    regime_rules, stability, settings: the config's `regime`, `stability` and `metrics`."""
+
+    Parameters
+    ----------
+    raw : dict
+        The case's raw YADE record (``spreadmap.records.read_raw``).
+    regime_rules : dict
+        The config's `regime` section (the regime rule's thresholds).
+    stability : dict
+        The config's `stability` section: ``max_overlap_ratio`` [R] and ``max_escaped`` (spheres);
+        optional ``max_wedge_overlap_ratio`` [R], ``max_flow_decline_z`` (standard errors) and
+        ``min_heap_h2`` [h^2], each None to switch its flag off.
+    settings : dict
+        The config's `metrics` section (``SETTING_KEYS``).
+
+    Returns
+    -------
+    dict
+        The case's row of the results table: identity, parameters, ``status``, ``mfr`` and ``pd``
+        (dimensionless; NaN unless the case finished), ``regime``, ``flagged`` and
+        ``flag_reason``, the run's diagnostics (time step, overlaps, energy, escaped spheres, CPU
+        and wall time [s]), the floor, and the noise and layer columns (``NEW_COLUMNS``).
+
+    Raises
+    ------
+    KeyError
+        If `settings` lacks a key of ``SETTING_KEYS`` (or the record a key it must have).
+    """
     check_settings(settings)
     p = raw["params"]
     out = {

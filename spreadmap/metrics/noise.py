@@ -123,10 +123,27 @@ NOISE_SD_COLUMNS = ("mfr_sd", "pd_sd", "layer_packing_sd", "coverage_sd", "rough
 
 def calibration_factors(table: pd.DataFrame, calibration: list[dict] | None, target: str | None = None) -> np.ndarray:
     """Per row, the factor the stated noise SD of `target` (a target name, e.g. "mfr") is scaled
-    by: the `factor` of the first region of `calibration` the case lies in that applies to the
+    by.
+
+    The `factor` of the first region of `calibration` the case lies in that applies to the
     target (a region is h/d from `h_over_d_from`, inclusive, to below `h_over_d_below`, a bound
     left out being open; it applies to the targets it lists under `targets`, to every one if it
-    lists none), 1 outside every such region."""
+    lists none), 1 outside every such region.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A results table (``h_um`` and ``d_um`` are read).
+    calibration : list of dict or None
+        The config's `noise_calibration` regions; None or empty: all factors 1.
+    target : str or None, optional
+        The target name; None: every region applies.
+
+    Returns
+    -------
+    numpy.ndarray
+        One factor (dimensionless) per row of `table`.
+    """
     import pandas as pd
     factors = np.ones(len(table))
     if not calibration or table.empty:

@@ -28,7 +28,21 @@ MODEL_TARGETS = tuple(COUNT)  # mfr, pd
 
 def check_sections(noise_model: dict | None, noise_calibration: list | None) -> None:
     """Refuse a band of `noise_calibration` that would scale a target the fitted law sets (a region
-    without `targets` scales every target): the law supersedes the bands for MFR and PD."""
+    without `targets` scales every target): the law supersedes the bands for MFR and PD.
+
+    Parameters
+    ----------
+    noise_model : dict or None
+        The config's `noise_model` section; None or empty: nothing to check.
+    noise_calibration : list or None
+        The config's `noise_calibration` regions.
+
+    Raises
+    ------
+    ValueError
+        If a region scales MFR or PD while `noise_model` sets that target's noise; the message
+        names the region's index.
+    """
     if not noise_model:
         return
     covered = [t for t in MODEL_TARGETS if t in noise_model]
@@ -67,10 +81,38 @@ def modelled_sd(table: pd.DataFrame, target: str, noise_model: dict, counting_c:
 
 def case_noise(table: pd.DataFrame, noise_model: dict | None, noise_calibration: list | None,
                counting_c: float = 0.37) -> pd.DataFrame:
-    """A copy of a results table whose noise SDs are those every analysis should weigh the cases by:
+    """A copy of a results table whose noise SDs are those every analysis should weigh the cases by.
+
     MFR's and PD's from the fitted law where `noise_model` gives one, the others (and all of them
     without a law) the stated SDs scaled by `noise_calibration`'s bands. The values are left as
-    they are."""
+    they are.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A results table: the targets, their stated SDs (``NOISE_SD_COLUMNS``), ``h_um``, ``d_um``
+        and, for a target the law sets, the count behind its noise (``n_passed`` for MFR,
+        ``n_pd`` for PD).
+    noise_model : dict or None
+        The config's `noise_model` section (the module docstring); None or empty: no law.
+    noise_calibration : list or None
+        The config's `noise_calibration` regions (``spreadmap.metrics.noise.calibration_factors``).
+    counting_c : float, optional
+        The counting law's constant c (dimensionless) the table's stated SDs were computed with;
+        used only where a case's value or count is 0, to read one sphere's worth of the measure
+        off its stated SD.
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy of `table` with the noise SD columns replaced, in the targets' units.
+
+    Raises
+    ------
+    ValueError
+        If the sections clash (``check_sections``) or the table lacks the count column a law
+        needs.
+    """
     check_sections(noise_model, noise_calibration)
     out = calibrated_noise(table, noise_calibration)
     for target in MODEL_TARGETS:

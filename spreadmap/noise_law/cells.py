@@ -113,7 +113,27 @@ OTHER_ARMS = {"precision": "rough floor, a 226-sphere window (c 0.45), cheaper s
 
 
 def published_cells(docs: Path) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """(cells of the shipped scene, cells of the other scenes) from the published tables."""
+    """(cells of the shipped scene, cells of the other scenes) from the published tables.
+
+    Parameters
+    ----------
+    docs : pathlib.Path
+        The repository's docs/ folder (its study/, fidelity/ and precision/ tables are read).
+
+    Returns
+    -------
+    shipped : pandas.DataFrame
+        The seed-repeat cells (``seed_cells``: one row per cell and target) of the shipped scene.
+    other : pandas.DataFrame
+        The cells of the arms of other scenes (``OTHER_ARMS``), to check the law against.
+
+    Raises
+    ------
+    FileNotFoundError
+        If a published table is missing.
+    ValueError
+        If the same case appears under two scene variants (``pooled_cases``).
+    """
     docs = Path(docs)
     study, fidelity = docs / "study", docs / "fidelity"
     knobs = pd.read_csv(fidelity / "cases_knobs.csv")

@@ -142,7 +142,32 @@ class NoiseLaw:
 
 def fit_law(cells: pd.DataFrame, terms=LAW, fixed: dict | None = None) -> NoiseLaw:
     """Maximum-likelihood fit of ln SD = ln value + sum_t beta_t x_t over the cells (one target),
-    with the terms in `fixed` held at the given values."""
+    with the terms in `fixed` held at the given values.
+
+    Parameters
+    ----------
+    cells : pandas.DataFrame
+        Seed-repeat cells of one target (``spreadmap.noise_law.cells.seed_cells``): ``s2`` (sample
+        variance, the target's units squared), ``dof``, ``mean`` and the columns the terms read
+        (``n``, ``h_over_d``, ...).
+    terms : sequence of str, optional
+        The law's terms (names of ``TERMS``, ``variant:<name>`` or ``source:<prefix>``); default
+        ``LAW``: a, b ln(N / N_REF), g ln((h/d) / HD_REF).
+    fixed : dict or None, optional
+        Terms held at given values (term -> coefficient), not fitted.
+
+    Returns
+    -------
+    NoiseLaw
+        The free terms' coefficients, their covariance (inverse observed information), the
+        log-likelihood, the cells and degrees of freedom fitted on, and `fixed`.
+
+    Raises
+    ------
+    ValueError
+        If a cell has s2 <= 0 or dof < 1, a term is unknown, or the free terms are not identified
+        by the cells.
+    """
     fixed = dict(fixed or {})
     free = tuple(t for t in terms if t not in fixed)
     if (cells["s2"] <= 0).any() or (cells["dof"] < 1).any():
@@ -160,7 +185,31 @@ def fit_law(cells: pd.DataFrame, terms=LAW, fixed: dict | None = None) -> NoiseL
 
 
 def profile_interval(cells: pd.DataFrame, law: NoiseLaw, term: str, level: float = 0.95) -> tuple[float, float]:
-    """Profile-likelihood interval of one coefficient: where 2 (ll_max - ll_profile) = chi2_1(level)."""
+    """Profile-likelihood interval of one coefficient: where 2 (ll_max - ll_profile) = chi2_1(level).
+
+    Parameters
+    ----------
+    cells : pandas.DataFrame
+        The cells `law` was fitted on.
+    law : NoiseLaw
+        The fitted law (``fit_law``).
+    term : str
+        One of the law's free terms.
+    level : float, optional
+        Confidence level of the interval.
+
+    Returns
+    -------
+    low, high : tuple of float
+        The interval's ends, in the coefficient's units.
+
+    Raises
+    ------
+    ValueError
+        If `term` is not a free term of `law`.
+    RuntimeError
+        If the profile does not reach the chi-square quantile within 1000 standard errors.
+    """
     q = stats.chi2.ppf(level, 1)
     k = list(law.terms).index(term)
     best, se = law.coef[k], math.sqrt(law.cov[k, k])
@@ -189,7 +238,26 @@ def profile_interval(cells: pd.DataFrame, law: NoiseLaw, term: str, level: float
 
 
 def likelihood_ratio(cells: pd.DataFrame, general: NoiseLaw, restricted: NoiseLaw) -> tuple[float, int, float]:
-    """(2 delta ll, the difference of free parameters, the chi-square p value)."""
+    """(2 delta ll, the difference of free parameters, the chi-square p value).
+
+    Parameters
+    ----------
+    cells : pandas.DataFrame
+        The cells both laws were fitted on (not read: the laws carry their log-likelihoods).
+    general : NoiseLaw
+        The law with more free terms.
+    restricted : NoiseLaw
+        The law nested in it.
+
+    Returns
+    -------
+    stat : float
+        2 (ll_general - ll_restricted), at least 0.
+    df : int
+        The difference of free parameters.
+    p : float
+        The chi-square (df) p value of `stat`.
+    """
     stat = max(2 * (general.loglik - restricted.loglik), 0.0)
     df = len(general.coef) - len(restricted.coef)
     return stat, df, float(stats.chi2.sf(stat, df))

@@ -34,7 +34,30 @@ from .fit import LAW, fit_law
 
 
 def leave_point_out(cells: pd.DataFrame, terms=LAW, fixed: dict | None = None, group: str = "point") -> pd.DataFrame:
-    """The cells with `sd_pred`, each from the law fitted without its group's cells, and `u`, `pit`."""
+    """The cells with `sd_pred`, each from the law fitted without its group's cells, and `u`, `pit`.
+
+    Parameters
+    ----------
+    cells : pandas.DataFrame
+        Seed-repeat cells of one target (``spreadmap.noise_law.cells.seed_cells``).
+    terms : sequence of str, optional
+        The law's terms (``spreadmap.noise_law.fit.fit_law``).
+    fixed : dict or None, optional
+        Terms held at given values.
+    group : str, optional
+        The column whose values are left out one at a time (default: the design point).
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy of `cells` with ``sd_pred`` (the held-out law's SD of one case, the target's units)
+        and the columns of ``scored``.
+
+    Raises
+    ------
+    ValueError
+        If the law cannot be fitted without a group's cells (``fit_law``).
+    """
     out = cells.copy()
     pred = np.full(len(cells), np.nan)
     for key in cells[group].unique():
@@ -46,7 +69,21 @@ def leave_point_out(cells: pd.DataFrame, terms=LAW, fixed: dict | None = None, g
 
 def scored(cells: pd.DataFrame, sd_col: str = "sd_pred") -> pd.DataFrame:
     """`u` = s^2 / predicted variance, its PIT under chi2_nu / nu, and `inside`, the seeds within the
-    90 % interval of a case (+- 1.645 predicted SDs of the cell's mean), for a column of predicted SDs."""
+    90 % interval of a case (+- 1.645 predicted SDs of the cell's mean), for a column of predicted SDs.
+
+    Parameters
+    ----------
+    cells : pandas.DataFrame
+        Seed-repeat cells with ``s2``, ``dof``, ``dev`` (each seed's scaled deviation) and the
+        predicted SD column.
+    sd_col : str, optional
+        The column of predicted SDs of one case (the target's units).
+
+    Returns
+    -------
+    pandas.DataFrame
+        A copy of `cells` with ``u``, ``pit`` and ``inside`` (a count of seeds).
+    """
     u = cells["s2"] / cells[sd_col] ** 2
     z = stats.norm.ppf(0.95)
     inside = [int(np.sum(np.abs(dev) <= z * sd)) for dev, sd in zip(cells["dev"], cells[sd_col])]
@@ -61,7 +98,29 @@ def predictive_check(cells: pd.DataFrame, group: str = "point", level: float = 0
                      boots: int = 2000, seed: int = 0) -> dict:
     """Summary of scored cells (`u`, `pit`, `inside`, `dof`, `seeds`): the pooled variance ratio with
     its chi-square and bootstrap-over-`group` intervals, the coverage of a case's 90 % interval with
-    its bootstrap interval, the KS p value of the PITs, and the verdicts."""
+    its bootstrap interval, the KS p value of the PITs, and the verdicts.
+
+    Parameters
+    ----------
+    cells : pandas.DataFrame
+        Scored cells (``scored`` or ``leave_point_out``).
+    group : str, optional
+        The column the bootstrap resamples by (default: the design point).
+    level : float, optional
+        Confidence level of the intervals.
+    boots : int, optional
+        Bootstrap resamples.
+    seed : int, optional
+        Seed of the bootstrap's random generator.
+
+    Returns
+    -------
+    dict
+        ``cells``, ``points``, ``dof``; the pooled variance ratio ``ratio`` with
+        ``ratio_chi2_lo``/``_hi`` and ``ratio_boot_lo``/``_hi``, ``sd_ratio`` (its square root) and
+        ``verdict``; ``seeds``, ``coverage90`` with ``coverage90_lo``/``_hi`` (the union of the
+        bootstrap and Clopper-Pearson intervals) and ``coverage_verdict``; ``ks_p``.
+    """
     dof, u = cells["dof"].to_numpy(float), cells["u"].to_numpy(float)
     seeds, inside = cells["seeds"].to_numpy(float), cells["inside"].to_numpy(float)
     D = dof.sum()

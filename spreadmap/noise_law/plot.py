@@ -28,8 +28,33 @@ def _grid(cells: pd.DataFrame, column: str, n: float, hd: float) -> pd.DataFrame
 
 def law_figure(cells: dict[str, pd.DataFrame], laws: dict[str, NoiseLaw], stated_c: float, bands: list,
                path_stem, floor: str | None = None) -> dict:
-    """cells, laws: per target (mfr, pd). The points are s / mean scaled to the reference count (left)
-    or h/d (right) by the law's own exponents, with their 68 % chi-square intervals."""
+    """The noise law's figure: per target, the cells' relative SD against h/d and against N.
+
+    The points are s / mean scaled to the reference count (left) or h/d (right) by the law's own
+    exponents, with their 68 % chi-square intervals; beside them the fitted law with its 95 % band
+    and the stated counting law.
+
+    Parameters
+    ----------
+    cells : dict of str to pandas.DataFrame
+        Per target (mfr, pd): the seed-repeat cells the law was fitted on.
+    laws : dict of str to NoiseLaw
+        Per target (mfr, pd): the fitted law (its ``b_ln_n`` and ``g_ln_hd`` are read).
+    stated_c : float
+        The counting law's constant c (dimensionless) of the stated SDs, c / sqrt(N).
+    bands : list
+        The `noise_calibration` regions the stated SDs are scaled by
+        (``spreadmap.metrics.noise.calibration_factors``).
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+    floor : str or None, optional
+        The floor the cells' cases ran on (spreadmap.case.substrate.floor_label).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     from ..metrics.noise import calibration_factors
     fig = new_figure(10.5, 8.0)
     axes = fig.subplots(2, 2)

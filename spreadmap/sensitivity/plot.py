@@ -9,6 +9,23 @@ from ..figures import new_figure, save_figure
 
 
 def plot_ranking(table, stem, floor: str | None = None) -> dict:
+    """One panel per target: each parameter's band width (left axis) and its S1 and ST (right
+    axis) with their intervals, the ranks the draws resolve, and the noise share of one run.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The ranking table of ``sensitivity`` (also the CSV saved).
+    stem : pathlib.Path or str
+        Where to save: ``<stem>.png``, ``.pdf`` and ``.csv``.
+    floor : str or None, optional
+        The floor the surrogate's cases ran on (spreadmap.case.substrate.floor_label).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     targets = list(dict.fromkeys(table["target"]))
     fig = new_figure(5.4 * len(targets), 4.8)
     axes = np.atleast_1d(fig.subplots(1, len(targets)))

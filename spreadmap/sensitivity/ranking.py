@@ -50,7 +50,39 @@ def ranking_table(sobol: pd.DataFrame, sobol_per_draw: dict, bands: pd.DataFrame
 
 def sensitivity(source, targets, n: int = 256, draws: int = 64, ranges=None, seed: int = 0,
                 n_sweep: int = 21) -> pd.DataFrame:
-    """Band widths and Sobol indices over the same number of draws, joined by ``ranking_table``."""
+    """Band widths and Sobol indices over the same number of draws, joined by ``ranking_table``.
+
+    Parameters
+    ----------
+    source : draw source
+        Anything with ``draws(X, n, seed, targets)`` and ``predict_stats(X)`` (a
+        ``SurrogateModel``, or ``FunctionDraws`` for a known function; see the package docstring).
+    targets : sequence of str
+        The targets ranked.
+    n : int, optional
+        Base sample size of the Sobol estimates (a power of 2).
+    draws : int, optional
+        Draws of the surrogate the intervals and ranks are taken over.
+    ranges : dict or None, optional
+        The config's ``ranges`` (``design.bounds``); None: the default ranges.
+    seed : int, optional
+        Seed of the Sobol sample and the draws.
+    n_sweep : int, optional
+        Points along each parameter's range for the band widths (at least 2).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (target, parameter), by decreasing ST within a target: ``band`` (the spread of
+        the target, in its units, when the parameter sweeps its range, the others at the centre)
+        with ``band_low``/``band_high`` and ``rank_band``; ``S1``, ``ST`` with their 95 % intervals
+        and ``rank_ST``; ``noise_share`` with its interval; ``n`` and ``draws``.
+
+    Raises
+    ------
+    ValueError
+        If `n` is not a power of 2 or `n_sweep` < 2.
+    """
     sob, sob_draws = sobol_draws(source, targets, n=n, draws=draws, ranges=ranges, seed=seed)
     band, band_draws = band_widths(source, targets, n_sweep=n_sweep, draws=draws, ranges=ranges, seed=seed)
     return ranking_table(sob, sob_draws, band, band_draws)

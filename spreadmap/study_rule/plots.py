@@ -44,6 +44,28 @@ def partition_values(table: pd.DataFrame, sweep: str, targets: Sequence[str] = c
     Partitions as in ``rule.convergence_table``: prefixes of ``order_col`` order
     (``partitions`` = their sizes) or, with ``partition_col``, one group per value (lattices),
     labelled by the group size.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The results table's rows of one sweep.
+    sweep : str
+        The sweep's name, written in the ``sweep`` column.
+    targets : sequence of str, optional
+        The targets (columns) whose values are listed.
+    partitions : iterable of int or None, optional
+        Prefix mode: the partition sizes; None: five sizes spaced geometrically from
+        min(16, rows) to all rows.
+    order_col : str, optional
+        Prefix mode: the column giving the cases' order in the sequence.
+    partition_col : str or None, optional
+        Group mode: the column whose values name the partitions (lattices).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``sweep``, ``partition`` (N), ``target`` and ``value``: one row per usable case,
+        finite value, partition and target.
     """
     parts: list[tuple[int, pd.DataFrame]] = []
     if partition_col is not None:
@@ -73,6 +95,23 @@ def plot_distributions(long_df: pd.DataFrame, path_stem,
     ``long_df``: columns sweep, partition, target, value (``partition_values`` of each sweep,
     concatenated).  Boxes: quartiles, whiskers 1.5 IQR, the mean as a triangle.  Rows share
     the y axis so the sweeps compare directly.
+
+    Parameters
+    ----------
+    long_df : pandas.DataFrame
+        Columns sweep, partition, target, value (also the CSV saved).
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+    targets : sequence of str, optional
+        The targets, one row of panels each.
+    floor : str or None, optional
+        The floor the cases ran on (spreadmap.case.substrate.floor_label), named on the figure
+        and in the CSV.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
     """
     sweeps = list(dict.fromkeys(long_df["sweep"]))
     fig = new_figure(4.2 * len(sweeps), 3.0 * len(targets))
@@ -125,6 +164,29 @@ def plot_statistics(sweeps: Mapping[str, pd.DataFrame], path_stem,
     the sweep ended (the floor rule of ``rule`` applies to skewness and kurtosis).
     With a partition sweep among them, the axes start at its smallest partition: a case-by-case
     curve's first few cases swing over a range that would flatten the rest (the CSV keeps them).
+
+    Parameters
+    ----------
+    sweeps : Mapping of str to pandas.DataFrame
+        Sweep name -> statistics frame (see above).
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv`` (the statistics in long form
+        with their bands).
+    targets : sequence of str, optional
+        The targets, one column of panels each.
+    tolerance : float, optional
+        The criterion's tolerance (0.005 = 0.5 %), the bands' half-width relative to the final
+        value.
+    floors : Mapping of str to float or None, optional
+        Denominator floors per statistic (``rule.DEFAULT_FLOORS`` for the ones left out).
+    floor : str or None, optional
+        The floor the cases ran on (spreadmap.case.substrate.floor_label), named on the figure
+        and in the CSV.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
     """
     long_df = pd.concat([_stats_long(k, v, targets, tolerance, floors) for k, v in sweeps.items()],
                         ignore_index=True)

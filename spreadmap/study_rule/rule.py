@@ -178,10 +178,38 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
     Group mode (``partition_col`` set, lattices): each value of ``partition_col`` is one
     partition, N = its number of rows, partitions are ordered by N.
 
-    Columns: ``partition`` (N), ``group`` (group mode only), ``n_usable``, per target
-    ``{t}_n_used`` and per target and statistic ``{t}_{s}``, ``{t}_{s}_change``,
-    ``{t}_{s}_denominator``, ``{t}_{s}_basis``; ``max_change`` and ``converged`` (all changes
-    < tolerance; False for the first partition, which has nothing to compare with).
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The results table's rows of one sweep (statistics use its usable rows).
+    target_cols : sequence of str, optional
+        The targets (columns) whose statistics are compared.
+    partitions : iterable of int or None, optional
+        Prefix mode: the partition sizes N, each in 1..len(table); None: multiples of 100 and
+        the total.
+    order_col : str, optional
+        Prefix mode: the column giving the cases' order in the sequence.
+    tolerance : float, optional
+        The criterion's tolerance (0.005 = 0.5 %).
+    floors : Mapping of str to float or None, optional
+        Denominator floors per statistic (``DEFAULT_FLOORS`` for the ones left out).
+    partition_col : str or None, optional
+        Group mode: the column whose values name the partitions (lattices).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per partition, by increasing N. Columns: ``partition`` (N), ``group`` (group
+        mode only), ``n_usable``, per target ``{t}_n_used`` and per target and statistic
+        ``{t}_{s}``, ``{t}_{s}_change``, ``{t}_{s}_denominator``, ``{t}_{s}_basis``;
+        ``max_change`` and ``converged`` (all changes < tolerance; False for the first
+        partition, which has nothing to compare with).
+
+    Raises
+    ------
+    ValueError
+        If the table holds several sweeps, two groups have the same size, or a partition lies
+        outside 1..len(table).
     """
     if "sweep" in table.columns and table["sweep"].nunique() > 1:
         raise ValueError("table holds several sweeps; filter it to one sweep first")
@@ -299,8 +327,28 @@ def running_statistics(values, start: int = 2, names: Sequence[str] | None = Non
     ``[n_cases, n_targets]`` in prefix order (default names ``mfr, pd`` for two columns,
     ``y0, y1, ...`` otherwise).  Values must be finite: drop failed cases first (their position
     in the sequence is then lost, which is what "statistics of the usable cases" means).
-    Returns a DataFrame indexed by ``n`` with columns ``{name}_{statistic}``; the numbers equal
-    ``partition_statistics(values[:n])`` (same estimators), computed in O(n log n) overall.
+
+    Parameters
+    ----------
+    values : array_like
+        The targets of the cases in prefix order: shape (n_cases,) or (n_cases, n_targets).
+    start : int, optional
+        The first n reported (at least 1).
+    names : sequence of str or None, optional
+        One name per target column (the column prefixes).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Indexed by ``n`` (start .. n_cases) with columns ``{name}_{statistic}``; the numbers
+        equal ``partition_statistics(values[:n])`` (same estimators), computed in O(n log n)
+        overall.
+
+    Raises
+    ------
+    ValueError
+        If `names` does not give one name per column, a value is not finite, or there are fewer
+        cases than `start`.
     """
     arr = np.asarray(values, dtype=float)
     if arr.ndim == 1:
@@ -375,6 +423,31 @@ def first_stable_n(running_df: pd.DataFrame, tolerance: float = DEFAULT_TOLERANC
     * ``checks_in_final_run``: the length of that final unbroken run of holding checks.
 
     None means "not converged within the cases run".
+
+    Parameters
+    ----------
+    running_df : pandas.DataFrame
+        Growing-N statistics: rows in increasing N (its index or a ``partition`` column),
+        columns ``{target}_{statistic}``.
+    tolerance : float, optional
+        The criterion's tolerance (0.005 = 0.5 %).
+    window : int, optional
+        K, the fewest holding checks the final unbroken run must contain for ``stable_from``.
+    lag : int, optional
+        The check at row i compares row i with row i - lag.
+    floors : Mapping of str to float or None, optional
+        Denominator floors per statistic (``DEFAULT_FLOORS`` for the ones left out).
+
+    Returns
+    -------
+    dict
+        ``first_holds``, ``stable_from`` (N or None), ``n_last``, ``checks_in_final_run``,
+        ``window``, ``tolerance`` and ``lag``.
+
+    Raises
+    ------
+    ValueError
+        If the frame has no ``{target}_{statistic}`` column.
     """
     if "partition" in running_df.columns:
         n_values = running_df["partition"].to_numpy()
@@ -501,6 +574,29 @@ def summary(sweeps: Mapping[str, Any], tolerance: float = DEFAULT_TOLERANCE,
     The ratio baseline/reference is reported as ``"kind": "ratio"`` when both converged, as a
     ``"lower bound"`` (cases run by the baseline / N of the reference) when only the reference
     converged, and as ``"undefined"`` (value None) when the reference did not converge.
+
+    Parameters
+    ----------
+    sweeps : Mapping of str to object
+        Sweep name -> its convergence result (see above).
+    tolerance : float, optional
+        The criterion's tolerance, reported.
+    reference : str, optional
+        The sweep whose N the ratio divides by (the LDS sweep).
+    baseline : str, optional
+        The sweep compared with it (the lattice).
+
+    Returns
+    -------
+    dict
+        ``tolerance``, ``criterion`` (in words), ``sweeps`` (per sweep ``converged_n``,
+        ``cases_run`` and ``status``) and, when both sweeps are given,
+        ``ratio_{baseline}_to_{reference}`` (``value``, ``kind``, ``text``).
+
+    Raises
+    ------
+    TypeError
+        If a sweep's result is none of the kinds above.
     """
     out: dict[str, Any] = {"tolerance": float(tolerance),
                            "criterion": ("all of mean, std (ddof=1), median, excess kurtosis and "

@@ -54,7 +54,34 @@ def read_points_csv(path) -> pd.DataFrame:
 
 
 def predict_logged(model, points, log) -> pd.DataFrame:
-    """predict(), every OutOfRangeWarning also written as 'warning: ...' to ``log``."""
+    """predict(), every OutOfRangeWarning also written as 'warning: ...' to ``log``.
+
+    Other warnings are re-issued as they came.
+
+    Parameters
+    ----------
+    model : SurrogateModel
+        The saved surrogate (``load_model``).
+    points : pandas.DataFrame or Mapping or array_like
+        The points in physical units (``prediction.as_points``: columns f, d_um, h_um, v_mm_s,
+        optionally name, preset, seed; or an (n, 4) array in that order).
+    log : file-like
+        Where the 'warning: ...' lines are printed (``print(..., file=log)``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``prediction.predict``'s table: per point the inputs, per target the mean, ``<t>_model_sd``
+        and ``<t>_run_sd``, then ``data_distance``, ``outside_design``, ``gap_below_d`` and
+        ``supported``.
+
+    Raises
+    ------
+    TypeError
+        If `model` is not a SurrogateModel.
+    ValueError
+        If the points are malformed (``prediction.as_points``).
+    """
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", OutOfRangeWarning)
         out = predict(model, points)
@@ -67,11 +94,43 @@ def predict_logged(model, points, log) -> pd.DataFrame:
 
 
 def write_csv(out: pd.DataFrame, path) -> None:
+    """Write a table as CSV (no index column), atomically (``spreadmap.files.atomic_path``).
+
+    Parameters
+    ----------
+    out : pandas.DataFrame
+        The table (e.g. ``predict_logged``'s predictions).
+    path : pathlib.Path or str
+        The CSV file; replaced whole or not at all (its folder is made if missing).
+
+    Raises
+    ------
+    OSError
+        If the file cannot be written; a full disk or a file-size limit names `path`.
+    """
     with atomic_path(path) as tmp:
         out.to_csv(tmp, index=False)
 
 
 def cli_main(argv: Sequence[str] | None = None) -> int:
+    """The command line of scripts/predict.py: predict with a saved surrogate at given points.
+
+    ``predict.py MODEL [--point NAME=VALUE ...]... [--csv FILE] [--out FILE]``: per target the
+    mean, the model's SD and the SD a new DEM run would show, printed as a table (and written to
+    ``--out`` as CSV). Out-of-range warnings go to stderr.
+
+    Parameters
+    ----------
+    argv : sequence of str or None, optional
+        The arguments after the program name; None: ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status: 0 on success, 2 when the points or the model file are refused (the
+        reason is printed to stderr as one line). argparse itself exits (status 2) on a bad
+        command line.
+    """
     ap = argparse.ArgumentParser(
         prog="predict.py",
         description="Predict with a saved spreadmap surrogate: per target the mean, the model's SD and "
@@ -106,7 +165,22 @@ def cli_main(argv: Sequence[str] | None = None) -> int:
 
 def snakemake_main(smk) -> None:
     """Snakemake ``script:`` entry. input: ``model``, optional ``points`` (CSV); params: optional
-    ``points`` (a list of {name: value} dicts or "NAME=VALUE ..." strings); output[0]: the CSV."""
+    ``points`` (a list of {name: value} dicts or "NAME=VALUE ..." strings); output[0]: the CSV.
+
+    Out-of-range warnings go to stderr and, if the rule declares one, to its log file.
+
+    Parameters
+    ----------
+    smk : snakemake.script.Snakemake
+        The rule script's ``snakemake`` object (``input``, ``params``, ``output``, ``log``).
+
+    Raises
+    ------
+    ValueError
+        If no points are given or they are malformed.
+    ModelFileError
+        If the model file is not a usable surrogate (``load_model``).
+    """
     inp, params = smk.input, smk.params
     model_path = inp.model if hasattr(inp, "model") else inp[0]
     pts_csv = inp.points if hasattr(inp, "points") else (inp[1] if len(inp) > 1 else None)

@@ -24,7 +24,19 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Correction:
-    """target -> (factor, its SD); `preset` ran, `reference` is what the factors lead to."""
+    """target -> (factor, its SD); `preset` ran, `reference` is what the factors lead to.
+
+    Parameters
+    ----------
+    factors : dict
+        target -> (factor k, its SD s_k), both dimensionless (reference / preset).
+    preset : str
+        The preset the cases ran.
+    reference : str
+        The preset the factors lead to.
+    source : str, optional
+        Where the factors come from (the config section's ``source``).
+    """
 
     factors: dict
     preset: str
@@ -34,7 +46,24 @@ class Correction:
     @classmethod
     def from_config(cls, config: dict | None) -> "Correction | None":
         """The config's factors, or None without any, or when they were measured for another preset
-        or floor than the config runs (``applies``: then the maps read as their preset does)."""
+        or floor than the config runs (``applies``: then the maps read as their preset does).
+
+        Parameters
+        ----------
+        config : dict or None
+            A config holding a ``fidelity_correction`` section (and the run's ``preset`` and
+            ``scene``, when given, to check it applies).
+
+        Returns
+        -------
+        Correction or None
+            The factors of the section's ``targets``, or None.
+
+        Raises
+        ------
+        ValueError
+            If a factor is not > 0 or its SD is negative.
+        """
         section = (config or {}).get("fidelity_correction")
         if not section or applies(config) is not None:
             return None
@@ -46,11 +75,44 @@ class Correction:
         return cls(factors, str(preset), str(section.get("reference", "reference")), str(section.get("source", "")))
 
     def scale(self, target: str, mean):
-        """`target`'s mean after its factor (unchanged without one)."""
+        """`target`'s mean after its factor (unchanged without one).
+
+        Parameters
+        ----------
+        target : str
+            The target.
+        mean : float or numpy.ndarray
+            Its mean as the preset reads it (the target's units).
+
+        Returns
+        -------
+        float or numpy.ndarray
+            k x mean, or `mean` when the target has no factor.
+        """
         return mean * self.factors[target][0] if target in self.factors else mean
 
     def stats(self, target: str, mean, model_sd, run_sd):
-        """(mean, model SD, run SD) of `target` after its factor; unchanged without one."""
+        """(mean, model SD, run SD) of `target` after its factor; unchanged without one.
+
+        The SDs are those of the product of two independent normal quantities (the module
+        docstring).
+
+        Parameters
+        ----------
+        target : str
+            The target.
+        mean : array_like
+            Its mean as the preset reads it (the target's units).
+        model_sd : array_like
+            The model's SD (same units).
+        run_sd : array_like
+            The SD of a new DEM run (same units).
+
+        Returns
+        -------
+        mean, model_sd, run_sd : tuple
+            The three after the factor (numpy arrays), or the inputs unchanged without a factor.
+        """
         if target not in self.factors:
             return mean, model_sd, run_sd
         k, s = self.factors[target]
@@ -59,14 +121,40 @@ class Correction:
                 np.sqrt(k**2 * run_sd**2 + (mean**2 + run_sd**2) * s**2))
 
     def draws(self, target: str, draws: np.ndarray, rng) -> np.ndarray:
-        """(n, points) draws of the map times one draw of the factor per row."""
+        """(n, points) draws of the map times one draw of the factor per row.
+
+        Parameters
+        ----------
+        target : str
+            The target.
+        draws : numpy.ndarray
+            Shape (n, points): draws of the map as the preset reads it.
+        rng : numpy.random.Generator
+            Draws the factors, normal with mean k and SD s_k.
+
+        Returns
+        -------
+        numpy.ndarray
+            Same shape; `draws` unchanged when the target has no factor.
+        """
         if target not in self.factors:
             return draws
         k, s = self.factors[target]
         return draws * rng.normal(k, s, size=(len(draws), 1))
 
     def label(self, targets=("mfr", "pd")) -> str:
-        """One line for a map: what the means are, e.g. "`default` corrected to `reference`: MFR x1.031 (SD 0.010)"."""
+        """One line for a map: what the means are, e.g. "`default` corrected to `reference`: MFR x1.031 (SD 0.010)".
+
+        Parameters
+        ----------
+        targets : sequence of str, optional
+            The map's targets; those without a factor are named as the preset reads them.
+
+        Returns
+        -------
+        str
+            The line.
+        """
         parts = [f"{t.upper() if t in ('mfr', 'pd') else t} x{k:.3f} (SD {s:.3f})" for t, (k, s) in self.factors.items()]
         rest = [t for t in targets if t not in self.factors]
         text = f"`{self.preset}` corrected to `{self.reference}`: " + ", ".join(parts)

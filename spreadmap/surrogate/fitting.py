@@ -71,6 +71,38 @@ def _clean(obj):
 
 
 def fit_surrogate(df: pd.DataFrame, config=None, source_path=None, ranges=None, log=print) -> SurrogateResult:
+    """Train and validate the surrogate on a results table (the steps of the module docstring).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The results table, with the noise SDs the cases are weighed by
+        (``spreadmap.noise_law.apply.case_noise``); its usable rows are trained on
+        (``training_rows.select``).
+    config : Mapping or None, optional
+        The config's ``surrogate:`` section (schema defaults for what it leaves out).
+    source_path : pathlib.Path or str or None, optional
+        The table's file, recorded in the metadata with its SHA-256; None: not recorded.
+    ranges : dict or None, optional
+        The config's ``ranges`` (``design.bounds``): the model's design space.
+    log : callable, optional
+        Called with one line of text per validation and final fit.
+
+    Returns
+    -------
+    SurrogateResult
+        The effective config, the training rows, the validation table (one row per target and
+        model, ``map_model`` marking the model that draws the maps), the out-of-fold
+        predictions, the study protocol's runs and summary, the learning curve, the fitted
+        ``SurrogateModel`` (with its metadata) and notes.
+
+    Raises
+    ------
+    ValueError
+        If the config breaks the schema, a target column or a required column is missing, a
+        case_id repeats, or there are too few usable cases to validate (fewer than
+        max(8, 2 x cv_folds)).
+    """
     cfg = make_config(config)
     targets = resolve_targets(cfg["targets"], df.columns)
     rows = select(df, targets)

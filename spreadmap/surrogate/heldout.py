@@ -20,8 +20,33 @@ def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float =
                   seed: int = 2026, prefix: str = "heldout") -> pd.DataFrame:
     """n points of a scrambled Sobol' sequence in the design space, each at least min_distance
     (Euclidean, unit cube) from every point of `ran` (the cases of every sweep) and from the points
-    already chosen, named <prefix>_01, ... Raises ValueError when 64 n candidates do not give n
-    such points."""
+    already chosen, named <prefix>_01, ...
+
+    Parameters
+    ----------
+    n : int
+        Number of points (>= 1).
+    ranges : dict
+        The config's ``ranges`` (``design.bounds``): the design space.
+    ran : pandas.DataFrame
+        The cases already run (the four parameters in physical units); may be empty.
+    min_distance : float, optional
+        Smallest Euclidean distance in the unit design cube to a case run or a point chosen.
+    seed : int, optional
+        Seed of the scrambled Sobol' sequence.
+    prefix : str, optional
+        The points' name prefix.
+
+    Returns
+    -------
+    pandas.DataFrame
+        `n` rows: ``name`` then the four parameters in physical units.
+
+    Raises
+    ------
+    ValueError
+        If ``n < 1``, or when 64 n candidates do not give n such points.
+    """
     if n < 1:
         raise ValueError(f"n must be >= 1, got {n}")
     candidates = qmc.Sobol(d=len(NAMES), scramble=True, seed=seed).random(int(2 ** math.ceil(math.log2(64 * n))))
@@ -52,7 +77,34 @@ def score(predictions: pd.DataFrame, cases: pd.DataFrame, target: str, level: fl
     the `level` intervals with its Clopper-Pearson interval (scipy.stats.binomtest), RMSE of the
     seed means against the prediction and the RMSE the stated SDs predict, the mean of z^2 (1 when
     the SDs are right) and its chi-square test's two tails: ``p_sd_right`` (small when the SDs are
-    too small: the intervals too narrow) and ``p_sd_too_wide`` (small when they are too large)."""
+    too small: the intervals too narrow) and ``p_sd_too_wide`` (small when they are too large).
+
+    Parameters
+    ----------
+    predictions : pandas.DataFrame
+        One row per point, made before the runs (see above).
+    cases : pandas.DataFrame
+        One row per usable run (``match_runs``).
+    target : str
+        The target scored.
+    level : float, optional
+        The level of the prediction intervals whose coverage is counted.
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        One row per point with a prediction and a usable run: ``name``, the prediction and its
+        SDs, ``seed_mean``, ``n_runs``, ``seed_sd``, ``sd_of_mean``, ``error``, ``z``, ``inside``.
+    summary : dict
+        ``target``, ``level``, ``points``, ``inside``, ``coverage`` with ``coverage_low`` and
+        ``coverage_high``, ``rmse``, ``rmse_expected``, ``mean_z2``, ``p_sd_right`` and
+        ``p_sd_too_wide``.
+
+    Raises
+    ------
+    ValueError
+        If no point has both a prediction and a usable run.
+    """
     z_level = stats.norm.ppf(0.5 + level / 2.0)
     by_point = cases.groupby("name")[target].agg(["mean", "count", "std"]).rename(
         columns={"mean": "seed_mean", "count": "n_runs", "std": "seed_sd"})
@@ -81,7 +133,23 @@ def score(predictions: pd.DataFrame, cases: pd.DataFrame, target: str, level: fl
 
 def runs_of(points: pd.DataFrame, seeds: list[int], preset: str) -> pd.DataFrame:
     """The points file to run (the README's points format: name, preset, seed, f, d_um, h_um,
-    v_mm_s), one row per point and packing seed, each point rounded as it will be simulated."""
+    v_mm_s), one row per point and packing seed, each point rounded as it will be simulated.
+
+    Parameters
+    ----------
+    points : pandas.DataFrame
+        The held-out points (``choose_points``).
+    seeds : list of int
+        The packing seeds each point runs with.
+    preset : str
+        The preset the runs use.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``name``, ``preset``, ``seed`` and the four parameters (rounded,
+        ``spreadmap.case.identity.rounded``).
+    """
     rows = [{"name": r["name"], "preset": preset, "seed": int(s), **rounded(r)} for _, r in points.iterrows()
             for s in seeds]
     return pd.DataFrame(rows, columns=["name", "preset", "seed", *NAMES])
@@ -89,7 +157,20 @@ def runs_of(points: pd.DataFrame, seeds: list[int], preset: str) -> pd.DataFrame
 
 def match_runs(points: pd.DataFrame, table: pd.DataFrame) -> pd.DataFrame:
     """The usable rows of a results table (spreadmap.table.usable) that ran a held-out point, with
-    the point's name: matched on the rounded design point, as the workflow names its cases."""
+    the point's name: matched on the rounded design point, as the workflow names its cases.
+
+    Parameters
+    ----------
+    points : pandas.DataFrame
+        The held-out points (``name`` and the four parameters).
+    table : pandas.DataFrame
+        A results table.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The matching usable rows of `table`, with a ``name`` column.
+    """
     key = lambda r: tuple(rounded(r)[n] for n in NAMES)  # noqa: E731
     names = {key(r): r["name"] for _, r in points.iterrows()}
     ok = table[usable(table)].copy()

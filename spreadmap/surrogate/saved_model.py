@@ -104,7 +104,28 @@ def sidecar_path(path) -> Path:
 
 def save_model(model: SurrogateModel, path) -> tuple[Path, Path]:
     """joblib file of the model and a JSON sidecar of its metadata and the file's SHA-256
-    (`model_sha256`), each written atomically."""
+    (`model_sha256`), each written atomically.
+
+    Parameters
+    ----------
+    model : SurrogateModel
+        The fitted surrogate.
+    path : pathlib.Path or str
+        The model file (e.g. results/surrogate/model.joblib); the sidecar is beside it
+        (``sidecar_path``: ``.joblib`` replaced by ``.json``, else ``.json`` appended).
+
+    Returns
+    -------
+    path, sidecar : tuple of pathlib.Path
+        The model file and its sidecar.
+
+    Raises
+    ------
+    ValueError
+        If the metadata holds a NaN or infinity (JSON without them).
+    OSError
+        If a file cannot be written.
+    """
     import joblib
 
     path = Path(path)
@@ -133,8 +154,37 @@ def _saved_sha256(path: Path) -> str | None:
 
 
 def load_model(path) -> SurrogateModel:
-    """Load a saved surrogate. Any file that is not one (missing, corrupt, foreign, older format)
-    raises ModelFileError with a one-line reason; a different scikit-learn version warns."""
+    """Load a saved surrogate.
+
+    Any file that is not one (missing, corrupt, foreign, older format) raises ModelFileError with
+    a one-line reason; a different scikit-learn version warns. The file is a joblib pickle: load
+    only files you trust.
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The model file (``save_model``).
+
+    Returns
+    -------
+    SurrogateModel
+        The saved surrogate.
+
+    Raises
+    ------
+    ModelFileError
+        If the file is missing, does not hold a spreadmap surrogate, or holds one of another
+        format.
+    CorruptModelError
+        (A ModelFileError and a spreadmap.records.CorruptFileError.) If the file does not
+        unpickle or its SHA-256 differs from the one its sidecar recorded (truncated or
+        corrupted).
+
+    Warns
+    -----
+    UserWarning
+        If the model was trained with another scikit-learn version.
+    """
     import joblib
     import sklearn
 

@@ -50,7 +50,24 @@ def make_config(config: Mapping | None = None) -> dict:
 
 
 def map_config(config: Mapping | None = None) -> dict:
-    """The maps' effective configuration (``sobol_n``: a power of 2, listed in the schema)."""
+    """The maps' effective configuration (``sobol_n``: a power of 2, listed in the schema).
+
+    Parameters
+    ----------
+    config : Mapping or None, optional
+        The config's ``maps:`` section (or part of it, e.g. ``{"support": ...}``); None: all
+        defaults.
+
+    Returns
+    -------
+    dict
+        A copy with the schema's defaults filled in (``support``, ``sobol_n``, ...).
+
+    Raises
+    ------
+    ValueError
+        If the section breaks the schema (schemas/config.schema.yaml); the message names the key.
+    """
     return checked("maps", config)
 
 

@@ -1,0 +1,220 @@
+"""The public API's docstrings are numpydoc and agree with the signatures (issue 34).
+
+The public API is what the workflow's thin entry points (scripts/*.py, tools/*.py) import from the
+package, listed below by hand: a name that an entry point starts to use is added here with its
+docstring. For each function, class (its constructor's arguments) and public method of a class:
+
+* a summary line;
+* section headers that numpydoc knows (a header is a line underlined with dashes);
+* a ``Parameters`` section when it takes arguments other than self/cls, whose entries
+  (``name : type`` lines at the section's indentation, each followed by an indented description)
+  are exactly the signature's arguments;
+* a ``Returns`` (or ``Yields``) section unless the return annotation says None (a callable
+  without a return annotation must document what it returns).
+
+Pure Python, no numpydoc needed. Names of the public API that live in modules other work owns
+(spreadmap/case, config, files, maps, study, experiments, surrogate/plots) are not listed yet.
+"""
+from __future__ import annotations
+
+import importlib
+import inspect
+import re
+
+import pytest
+
+PUBLIC_API = [
+    ("spreadmap.decisions", "decision_config"),
+    ("spreadmap.decisions", "powders_from_config"),
+    ("spreadmap.decisions", "recommendations"),
+    ("spreadmap.decisions.explorer", "write_explorer"),
+    ("spreadmap.decisions.figure", "decision_figure"),
+    ("spreadmap.design", "bounds"),
+    ("spreadmap.design", "to_physical"),
+    ("spreadmap.design", "to_unit"),
+    ("spreadmap.fidelity.correction", "config_block"),
+    ("spreadmap.fidelity.correction", "correction"),
+    ("spreadmap.fidelity.correction", "pairs"),
+    ("spreadmap.fidelity.plots", "correction_figure"),
+    ("spreadmap.fidelity.plots", "knobs_figure"),
+    ("spreadmap.fidelity.plots", "pareto_figure"),
+    ("spreadmap.fidelity.study", "goal"),
+    ("spreadmap.fidelity.study", "knob_errors"),
+    ("spreadmap.fidelity.study", "machine_description"),
+    ("spreadmap.fidelity.study", "markdown_summary"),
+    ("spreadmap.fidelity.study", "preset_errors"),
+    ("spreadmap.logs", "log_to"),
+    ("spreadmap.loop.cost", "PlannedCost"),
+    ("spreadmap.loop.model", "make_map_fit"),
+    ("spreadmap.loop.plots", "plot_converge_path"),
+    ("spreadmap.loop.stepper", "step"),
+    ("spreadmap.loop.stepper", "step_number"),
+    ("spreadmap.metrics", "case_metrics"),
+    ("spreadmap.metrics.noise", "calibration_factors"),
+    ("spreadmap.noise_law.apply", "case_noise"),
+    ("spreadmap.noise_law.apply", "check_sections"),
+    ("spreadmap.noise_law.cells", "published_cells"),
+    ("spreadmap.noise_law.fit", "fit_law"),
+    ("spreadmap.noise_law.fit", "likelihood_ratio"),
+    ("spreadmap.noise_law.fit", "profile_interval"),
+    ("spreadmap.noise_law.heldout", "leave_point_out"),
+    ("spreadmap.noise_law.heldout", "predictive_check"),
+    ("spreadmap.noise_law.heldout", "scored"),
+    ("spreadmap.noise_law.plot", "law_figure"),
+    ("spreadmap.records", "read_json_object"),
+    ("spreadmap.records", "read_metrics"),
+    ("spreadmap.records", "read_raw"),
+    ("spreadmap.records", "read_table"),
+    ("spreadmap.sampling", "halton"),
+    ("spreadmap.sampling", "lattice"),
+    ("spreadmap.sensitivity", "plot_ranking"),
+    ("spreadmap.sensitivity", "sensitivity"),
+    ("spreadmap.study_rule", "convergence_table"),
+    ("spreadmap.study_rule", "first_stable_n"),
+    ("spreadmap.study_rule", "running_statistics"),
+    ("spreadmap.study_rule", "summary"),
+    ("spreadmap.study_rule.plots", "partition_values"),
+    ("spreadmap.study_rule.plots", "plot_distributions"),
+    ("spreadmap.study_rule.plots", "plot_statistics"),
+    ("spreadmap.summary", "run_summary"),
+    ("spreadmap.summary", "summary_text"),
+    ("spreadmap.surrogate", "fit_surrogate"),
+    ("spreadmap.surrogate", "load_model"),
+    ("spreadmap.surrogate", "save_model"),
+    ("spreadmap.surrogate.cli", "cli_main"),
+    ("spreadmap.surrogate.cli", "predict_logged"),
+    ("spreadmap.surrogate.cli", "snakemake_main"),
+    ("spreadmap.surrogate.cli", "write_csv"),
+    ("spreadmap.surrogate.correction", "Correction"),
+    ("spreadmap.surrogate.heldout", "choose_points"),
+    ("spreadmap.surrogate.heldout", "match_runs"),
+    ("spreadmap.surrogate.heldout", "runs_of"),
+    ("spreadmap.surrogate.heldout", "score"),
+    ("spreadmap.surrogate.saved_model", "ModelFileError"),
+    ("spreadmap.surrogate.settings", "map_config"),
+    ("spreadmap.table", "build_table"),
+    ("spreadmap.table", "usable"),
+    ("spreadmap.table", "write_table"),
+]
+
+SECTIONS = {"Parameters", "Returns", "Yields", "Receives", "Other Parameters", "Raises", "Warns", "Warnings",
+            "See Also", "Notes", "References", "Examples", "Attributes", "Methods"}
+UNDERLINE = re.compile(r"^-{3,}$")
+ENTRY = re.compile(r"^(?P<names>[^:]+?) : (?P<type>\S.*)$")
+NAME = re.compile(r"^\*{0,2}[A-Za-z_]\w*$")
+
+
+def _callables():
+    """(id, object, what) for every function, class and public method of PUBLIC_API."""
+    out = []
+    for module, name in PUBLIC_API:
+        obj = getattr(importlib.import_module(module), name)
+        qual = f"{module}.{name}"
+        if inspect.isclass(obj):
+            out.append((qual, obj, "class"))
+            for attr, member in vars(obj).items():
+                if attr.startswith("_") or isinstance(member, property):
+                    continue
+                if isinstance(member, (classmethod, staticmethod)) or inspect.isfunction(member):
+                    out.append((f"{qual}.{attr}", getattr(obj, attr), "method"))
+        else:
+            out.append((qual, obj, "function"))
+    return out
+
+
+CALLABLES = _callables()
+
+
+def sections(doc: str) -> dict[str, list[str]]:
+    """Header -> the lines under its underline, up to the next header (docstring dedented)."""
+    lines = inspect.cleandoc(doc).splitlines()
+    heads = [i for i in range(len(lines) - 1) if lines[i].strip() and UNDERLINE.match(lines[i + 1].strip())]
+    return {lines[i].strip(): lines[i + 2:(heads[k + 1] if k + 1 < len(heads) else len(lines))]
+            for k, i in enumerate(heads)}
+
+
+def documented_parameters(lines: list[str]) -> list[str]:
+    """The names of a Parameters section's entries; each entry must read `name : type` and be
+    followed by an indented description."""
+    names = []
+    for i, line in enumerate(lines):
+        if not line.strip() or line[0].isspace():
+            continue
+        m = ENTRY.match(line.rstrip())
+        assert m, f"Parameters entry {line!r} is not of the form 'name : type'"
+        following = lines[i + 1] if i + 1 < len(lines) else ""
+        assert following[:1].isspace() and following.strip(), f"Parameters entry {line!r} has no description"
+        for name in (n.strip() for n in m["names"].split(",")):
+            assert NAME.match(name), f"{name!r} in {line!r} is not a parameter name"
+            names.append(name.lstrip("*"))
+    return names
+
+
+def signature_parameters(obj, what: str) -> list[str] | None:
+    """The arguments a caller passes (self/cls dropped); None when there is no signature to check
+    (an exception class that keeps its base's constructor)."""
+    if what == "class" and "__init__" not in vars(obj) and not hasattr(obj, "__dataclass_fields__"):
+        return None
+    sig = inspect.signature(obj)
+    return [p for p in sig.parameters if p not in ("self", "cls")]
+
+
+def returns_nothing(obj, what: str) -> bool:
+    if what == "class":
+        return True
+    annotation = inspect.signature(obj).return_annotation
+    return annotation is None or annotation == "None"
+
+
+@pytest.mark.parametrize("qual, obj, what", CALLABLES, ids=[c[0] for c in CALLABLES])
+def test_numpydoc(qual, obj, what):
+    doc = obj.__doc__
+    assert doc and doc.strip(), f"{qual}: no docstring"
+    assert inspect.cleandoc(doc).splitlines()[0].strip(), f"{qual}: no summary line"
+    found = sections(doc)
+    unknown = set(found) - SECTIONS
+    assert not unknown, f"{qual}: section(s) {sorted(unknown)} are not numpydoc sections"
+
+    params = signature_parameters(obj, what)
+    if params:
+        assert "Parameters" in found, f"{qual}: takes {params} but has no Parameters section"
+        named = documented_parameters(found["Parameters"])
+        missing = [p for p in params if p not in named]
+        extra = [p for p in named if p not in params]
+        assert not missing, f"{qual}: parameter(s) {missing} not documented"
+        assert not extra, f"{qual}: documents {extra}, which the signature does not have"
+        assert len(named) == len(set(named)), f"{qual}: a parameter is documented twice"
+    if not returns_nothing(obj, what):
+        body = [line for key in ("Returns", "Yields") for line in found.get(key, []) if line.strip()]
+        assert body, f"{qual}: returns a value but has no Returns (or Yields) section"
+
+
+def test_public_api_listed_once():
+    assert len(PUBLIC_API) == len(set(PUBLIC_API))
+
+
+def test_parser_reads_numpydoc():
+    def f(a, b=1, *args, **kwargs):
+        """Summary.
+
+        Parameters
+        ----------
+        a, b : int
+            Numbers.
+        *args : tuple
+            More.
+        **kwargs : dict
+            Options.
+
+        Returns
+        -------
+        int
+            A number.
+        """
+
+    found = sections(f.__doc__)
+    assert set(found) == {"Parameters", "Returns"}
+    assert documented_parameters(found["Parameters"]) == ["a", "b", "args", "kwargs"]
+    assert signature_parameters(f, "function") == ["a", "b", "args", "kwargs"]
+    with pytest.raises(AssertionError):
+        documented_parameters(["a: int", "    no space before the colon"])
