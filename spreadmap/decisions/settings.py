@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from ..config import checked
 from ..design import NAMES, bounds
-from ..surrogate.settings import BASE_TARGETS, LAYER_TARGETS, checked
+from ..surrogate.settings import BASE_TARGETS, LAYER_TARGETS
 
 
 class DecisionError(ValueError):
