@@ -141,7 +141,7 @@ def _check_cross_keys(config: dict) -> None:
 
     for problem in check_fidelity(config):
         raise ConfigError(problem)
-    clearance = (config.get("metrics") or {}).get("pd_clearance_d", 0.0)
+    clearance = config["metrics"]["pd_clearance_d"]  # filled from the schema by validate() above
     for name, preset in presets.items():
         if preset["window_d"] - clearance < config["scene"]["blade_thickness_d"]:
             raise ConfigError(f"config key 'presets.{name}.window_d': value {preset['window_d']} is not allowed; "
