@@ -9,8 +9,8 @@ log_to(snakemake)  # noqa: F821
 sm = snakemake  # noqa: F821
 p = sm.params
 model = load_model(sm.input.model)
-result = sampling_study.study(predictor=model, ranges=p.ranges, seeds=p.study.get("seeds", 8),
-                              k_max=p.study.get("k_max", 10), tolerance=p.tolerance, floors=p.floors)
+result = sampling_study.study(predictor=model, ranges=p.ranges, seeds=p.study["seeds"],
+                              k_max=p.study["k_max"], tolerance=p.tolerance, floors=p.floors)
 result.table.to_csv(sm.output.table, index=False)
 result.summary.to_csv(sm.output.summary, index=False)
 plot_sampling_study(result.table, sm.output.figure[: -len(".png")], result.summary)

@@ -122,17 +122,16 @@ def _check_cross_keys(config: dict) -> None:
             raise ConfigError(f"config key 'noise_calibration': {error}") from None
     named = set(((config.get("points") or {}).get("named") or {}))
     for key in ("cases", "vtk"):
-        for name in (config.get("pictures") or {}).get(key, []):
+        for name in config["pictures"][key]:
             if name not in named:
                 raise ConfigError(f"config key 'pictures.{key}': value {name!r} is not allowed; "
                                   f"it must name a chosen point of points.named: {sorted(named)}")
-    if "surrogate" in config:
-        from .surrogate import make_config
+    from .surrogate import make_config
 
-        try:
-            make_config(config["surrogate"])
-        except (ValueError, KeyError) as error:
-            raise ConfigError(f"config key 'surrogate': {error}") from None
+    try:
+        make_config(config["surrogate"])
+    except (ValueError, KeyError) as error:
+        raise ConfigError(f"config key 'surrogate': {error}") from None
     from .decisions.settings import problems as decision_problems
 
     for problem in decision_problems(config):

@@ -111,11 +111,12 @@ def _study_rule(study: Path) -> list[str]:
     the LDS partitions of config.yaml whose every case has run, the lattices whose every case has
     run; the largest relative change of the five statistics of MFR and PD from the partition
     before."""
-    from spreadmap.study_rule.rule import convergence_table, first_converged
+    from spreadmap.study_rule.rule import DEFAULT_TOLERANCE, convergence_table, first_converged
 
     cfg = _read_yaml(study / "config.yaml")
     conv = cfg.get("convergence") or {}
-    tol, floors = conv.get("tolerance", 0.005), conv.get("floors")
+    # a published config (not validated: it may predate the schema) without a tolerance ran the schema's
+    tol, floors = conv.get("tolerance", DEFAULT_TOLERANCE), conv.get("floors")
     lines = []
     lds = _read_csv(study / "cases_lds.csv")
     partitions = ((cfg.get("sweeps") or {}).get("lds") or {}).get("partitions", [])
