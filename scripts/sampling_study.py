@@ -1,6 +1,7 @@
 """Snakemake entry: the DEM-free sampling-design study (LDS vs lattice vs random)."""
 from spreadmap.experiments import sampling_study
 from spreadmap.experiments.plots import plot_sampling_study
+from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.surrogate import load_model
 
@@ -11,8 +12,8 @@ p = sm.params
 model = load_model(sm.input.model)
 result = sampling_study.study(predictor=model, ranges=p.ranges, seeds=p.study["seeds"],
                               k_max=p.study["k_max"], tolerance=p.tolerance, floors=p.floors)
-result.table.to_csv(sm.output.table, index=False)
-result.summary.to_csv(sm.output.summary, index=False)
+write_text_atomically(sm.output.table, result.table.to_csv(index=False))
+write_text_atomically(sm.output.summary, result.summary.to_csv(index=False))
 plot_sampling_study(result.table, sm.output.figure[: -len(".png")], result.summary)
 print(result.summary.to_string())
 print(result.ratios.to_string())

@@ -21,6 +21,7 @@ from scipy.stats import qmc
 
 from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
+from spreadmap.files import write_text_atomically
 from spreadmap.loop.stepper import step_number
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
@@ -323,7 +324,7 @@ def _trends(study: Path, ranges: dict | None) -> list[str]:
                                       high[NAMES.index("h_um")] / low[NAMES.index("d_um")], 6)}
     for variable, levels in grids.items():
         effect = main_effect(model, ranges, variable, levels)
-        effect.to_csv(study / f"trend_{variable}.csv", index=False)
+        write_text_atomically(study / f"trend_{variable}.csv", effect.to_csv(index=False))
         for target in model.targets:
             ends = effect.dropna(subset=[target]).iloc[[0, -1]]
             a, b = ends.to_dict("records")
