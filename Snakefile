@@ -46,8 +46,8 @@ rule all:
         prediction_targets(),
         "results/maps/sensitivity_ranking_table.csv",
         rules.decisions.input,
-        expand("results/pictures/{name}.png", name=PICTURES.get("cases", [])),
-        expand("results/vtk/{name}", name=PICTURES.get("vtk", [])),
+        expand("results/pictures/{name}.png", name=PICTURES["cases"]),
+        expand("results/vtk/{name}", name=PICTURES["vtk"]),
 
 
 rule sweeps:

@@ -124,7 +124,7 @@ def main(argv=None) -> int:
         published = published[published["preset"].astype(str) == "default"]
         # each case's noise as the workflow weighs it: MFR's and PD's from the fitted noise law
         # (config noise_model, docs/noise), the layer measures' from the bands
-        published = case_noise(published, config.get("noise_model"), config.get("noise_calibration", []),
+        published = case_noise(published, config.get("noise_model"), config["noise_calibration"],
                                config["metrics"]["counting_noise_c"])
         t0 = time.time()
         world = replay.build_world(published, config, law)

@@ -66,14 +66,13 @@ def main(argv=None) -> int:
 
     import numpy as np
     import sklearn
-    import yaml
 
+    from spreadmap import config as spreadmap_config
     from spreadmap import design
     from spreadmap import surrogate as S
 
     model = S.load_model(args.model)
-    with open(args.config) as fh:
-        ranges = (yaml.safe_load(fh) or {}).get("ranges")
+    ranges = spreadmap_config.load(args.config).get("ranges")  # optional: absent, spreadmap.design's
     low, high = design.bounds(ranges)
     rng = np.random.default_rng(args.seed)
     X = low + (high - low) * rng.random((args.n, len(design.NAMES)))

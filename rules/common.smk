@@ -21,7 +21,7 @@ from spreadmap.case.substrate import floor_label
 from spreadmap.surrogate.correction import Correction, uncorrected_label
 from spreadmap.surrogate.correction import applies as correction_applies
 
-try:
+try:  # in place: every default of schemas/config.schema.yaml is filled here, so the rules read config plainly
     spreadmap_config.validate(config)
 except spreadmap_config.ConfigError as error:
     raise WorkflowError(f"spreadmap: bad configuration: {error}") from None
@@ -31,9 +31,9 @@ QUICK_FIRST = 10**8  # scheduling priority of the per-case jobs that take a seco
 CASES = {}  # case id -> scene parameters of the YADE script
 CASE_OF = {}  # (rounded design point, preset, seed) -> case id under this config (the content is derived once)
 SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list of (case id, label)
-RANGES = config.get("ranges")
+RANGES = config.get("ranges")  # optional: without it, the design space of spreadmap.design
 SCENE_SHA256 = template_sha256()
-SWEEPS = config.get("sweeps") or {}
+SWEEPS = config.get("sweeps") or {}  # optional: no fixed sweeps, no LDS sequence to start the main job from
 FLOOR = floor_label(config)  # the floor the cases are spread on, named on every map, table and report
 # what the map model's numbers are: the floor, and the preset's step to `reference` when config
 # `fidelity_correction` gives one (spreadmap.surrogate.correction); named on every map and decision
@@ -88,7 +88,7 @@ if _legacy:  # results of a run before content keys: not re-used until migrated 
           f"so that they are re-used", file=sys.stderr)
 
 try:
-    _planned = list(planned_cases(config, lds_points=(config.get("converge") or {}).get("budget", 0),
+    _planned = list(planned_cases(config, lds_points=config["converge"]["budget"],
                                   scene_sha256=SCENE_SHA256))
 except (UnsafeTimeStep, ValueError) as error:
     raise WorkflowError(f"spreadmap: case refused before anything ran: {error}") from None
@@ -101,17 +101,17 @@ for _case in _planned:
         if _case.sweep == "lattice":  # one lattice size alone: results/tables/lattice_k3.csv runs k = 3 first
             register(f"lattice_k{_case.label['k']}", _case.point, _case.label, preset=_case.preset)
 try:
-    _points = chosen_points(config.get("points"), workflow.basedir, presets=config.get("presets"))
+    _points = chosen_points(config.get("points"), workflow.basedir, presets=config["presets"])  # points: optional
 except ValueError as error:
     raise WorkflowError(f"spreadmap: bad chosen points: {error}") from None
 for _i, _p in enumerate(_points):
     register("points", _p["point"], {"index": _i, "name": _p["name"]},
-             preset=_p["preset"] or (config.get("points") or {}).get("preset"), seed=_p["seed"])
+             preset=_p["preset"] or config["points"].get("preset"), seed=_p["seed"])  # None: the config's preset
 
 # The fidelity study (`snakemake fidelity`): its own two sets, outside the main job. A knob value
 # is a preset of its own (spreadmap.fidelity.plan), added to the presets here.
 FIDELITY_SETS = ("fidelity", "knobs")
-FIDELITY = config.get("fidelity") or {}
+FIDELITY = config.get("fidelity") or {}  # optional: the fidelity study needs its section
 KNOBS = FIDELITY.get("knobs") or {}
 if config.get("fidelity"):
     config["presets"].update(knob_presets(config))
@@ -122,16 +122,16 @@ if config.get("fidelity"):
                                           "is_base": _row["is_base"]}, preset=_row["preset"], seed=_row["seed"])
 
 
-GROW = config.get("converge", {})
-CONV = config.get("convergence", {})
+GROW = config["converge"]
+CONV = config["convergence"]
 
 
 # `snakemake converge` (rules/converge.smk): following its checkpoints
 def converge_chain(n):
     """(case ids of the run's first n cases, the step before n or None), following the steps."""
-    start = GROW.get("start", 32)
-    preset = SWEEPS.get("lds", {}).get("preset")
-    ids, m, prev = list(lds_case_ids(start)), start, None
+    start = GROW["start"]
+    ids, m, prev = list(lds_case_ids(start)), start, None  # refuses first without an LDS sweep
+    preset = SWEEPS["lds"].get("preset")  # None: the config's preset
     while m < n:
         with open(checkpoints.converge_step.get(n=m).output.step) as fh:
             step = json.load(fh)
@@ -154,7 +154,7 @@ def converge_step_input(wildcards):
 
 def converge_final_step(wildcards):
     """Follow the converge checkpoints from the LDS start to the step that stopped."""
-    n = GROW.get("start", 32)
+    n = GROW["start"]
     while True:
         with open(checkpoints.converge_step.get(n=n).output.step) as fh:
             step = json.load(fh)
@@ -172,7 +172,7 @@ def converge_final_cases():
     ids, _ = converge_chain(n)
     with open(final) as fh:
         is_lds = json.load(fh)["is_lds"]
-    return list(zip(ids, loop_labels(is_lds[:len(ids)], GROW.get("start", 32), GROW.get("batch", 16))))
+    return list(zip(ids, loop_labels(is_lds[:len(ids)], GROW["start"], GROW["batch"])))
 
 
 def case_raw_input(wildcards):

@@ -12,16 +12,16 @@ checkpoint converge_step:
         step="results/converge/step_{n}.json",
     params:
         converge=GROW,
-        tolerance=CONV.get("tolerance", 0.005),
-        floors=CONV.get("floors"),
+        tolerance=CONV["tolerance"],
+        floors=CONV.get("floors"),  # optional: absent, the study's floors (spreadmap.study_rule.rule.DEFAULT_FLOORS)
         ranges=RANGES,
-        maps=config.get("maps", {}),
-        lds_seed=SWEEPS.get("lds", {}).get("seed", 42),
-        noise_calibration=config.get("noise_calibration", []),
-        noise_model=config.get("noise_model"),
-        counting_c=config.get("metrics", {}).get("counting_noise_c", 0.37),
-        surrogate=config.get("surrogate", {}),
-        scene_config={k: config.get(k) for k in ("preset", "presets", "material", "scene", "metrics", "converge")},
+        maps=config["maps"],
+        lds_seed=SWEEPS["lds"]["seed"] if "lds" in SWEEPS else None,  # no LDS sweep: no LDS sequence to start from
+        noise_calibration=config["noise_calibration"],
+        noise_model=config.get("noise_model"),  # optional: absent, the stated counting-law SDs
+        counting_c=config["metrics"]["counting_noise_c"],
+        surrogate=config["surrogate"],
+        scene_config={k: config[k] for k in ("preset", "presets", "material", "scene", "metrics", "converge")},
     wildcard_constraints:
         n=r"\d+",
     log:

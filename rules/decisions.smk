@@ -1,4 +1,4 @@
-DECISIONS = config.get("decisions", {})
+DECISIONS = config["decisions"]
 
 
 rule decide:
@@ -12,7 +12,7 @@ rule decide:
         figure=report("results/decisions/probability.png", caption="captions/decisions.rst", category="Decisions"),
     params:
         decisions=DECISIONS,
-        support=MAPS.get("support", {}),
+        support=MAPS["support"],
         floor=MAP_BASIS,
     log:
         "logs/decisions.log",
@@ -34,7 +34,7 @@ rule explorer:
         csv="results/decisions/explorer.csv",
     params:
         decisions=DECISIONS,
-        support=MAPS.get("support", {}),
+        support=MAPS["support"],
         floor=MAP_BASIS,
     log:
         "logs/explorer.log",

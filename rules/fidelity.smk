@@ -24,7 +24,7 @@ rule fidelity_analysis:
         pareto=report("results/fidelity/pareto.png", caption="captions/fidelity_pareto.rst", category="Fidelity"),
         **({"knobs_figure": report("results/fidelity/knob_sweeps.png", caption="captions/fidelity_knobs.rst",
                                    category="Fidelity")} if KNOBS else {}),
-    params:
+    params:  # FIDELITY is {} without a `fidelity:` section (fidelity_outputs then refuses): .get, no defaults
         reference=FIDELITY.get("reference"),
         knob_preset=KNOBS.get("preset"),
         goal_presets=[p for p in FIDELITY.get("presets", []) if p != FIDELITY.get("reference")],

@@ -1,4 +1,4 @@
-MAPS = config.get("maps", {})
+MAPS = config["maps"]
 MAP_FIGURES = ["machine_map", "powder_band_map", "powder_cluster_map", "parallel_coordinates",
                "regime_overlay", "sensitivity_ranking"]
 
@@ -19,9 +19,9 @@ rule maps:
         floor=MAP_BASIS,
         regime=config["regime"],
         ranges=RANGES,
-        noise_calibration=config.get("noise_calibration", []),
-        noise_model=config.get("noise_model"),
-        counting_c=config.get("metrics", {}).get("counting_noise_c", 0.37),
+        noise_calibration=config["noise_calibration"],
+        noise_model=config.get("noise_model"),  # optional: absent, the stated counting-law SDs
+        counting_c=config["metrics"]["counting_noise_c"],
     log:
         "logs/maps.log",
     localrule: True

@@ -1,4 +1,4 @@
-PICTURES = config.get("pictures", {})
+PICTURES = config["pictures"]
 NAMED = {label["name"]: cid for cid, label in SETS.get("points", [])}
 
 
@@ -10,7 +10,7 @@ rule case_picture:
         report("results/pictures/{name}.png", caption="captions/case_picture.rst", category="Cases",
                subcategory="{name}"),
     params:
-        colour_by=PICTURES.get("colour_by", "speed"),
+        colour_by=PICTURES["colour_by"],
     log:
         "logs/pictures/{name}.log",
     localrule: True

@@ -4,7 +4,7 @@ rule sample_lds:
         samples="results/samples/lds.csv",
     params:
         n=lambda wc: lds_size(),
-        seed=SWEEPS.get("lds", {}).get("seed"),
+        seed=SWEEPS["lds"]["seed"] if "lds" in SWEEPS else None,  # no LDS sweep: the rule is not asked for
         ranges=RANGES,
     log:
         "logs/samples/lds.log",
@@ -20,7 +20,7 @@ rule sample_lattice:
     output:
         samples="results/samples/lattice.csv",
     params:
-        k=SWEEPS.get("lattice", {}).get("k", []),
+        k=SWEEPS["lattice"]["k"] if "lattice" in SWEEPS else [],  # no lattice sweep: the rule is not asked for
         ranges=RANGES,
     log:
         "logs/samples/lattice.log",

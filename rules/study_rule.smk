@@ -11,10 +11,10 @@ rule convergence:
         statistics=report("results/convergence/statistics.png", caption="captions/statistics.rst",
                           category="Convergence"),
     params:
-        partitions=SWEEPS.get("lds", {}).get("partitions", []),
-        tolerance=CONV.get("tolerance", 0.005),
-        floors=CONV.get("floors"),
-        window=CONV.get("window", 3),
+        partitions=SWEEPS["lds"]["partitions"] if "lds" in SWEEPS else [],  # no LDS sweep: no partitions
+        tolerance=CONV["tolerance"],
+        floors=CONV.get("floors"),  # optional: absent, the study's floors (spreadmap.study_rule.rule.DEFAULT_FLOORS)
+        window=CONV["window"],
         floor=FLOOR,
     log:
         "logs/convergence.log",
@@ -36,9 +36,9 @@ rule sampling_study:
         figure=report("results/convergence/sampling_study.png", caption="captions/sampling_study.rst",
                       category="Convergence"),
     params:
-        study=CONV.get("sampling_study", {}),
-        tolerance=CONV.get("tolerance", 0.005),
-        floors=CONV.get("floors"),
+        study=CONV["sampling_study"],
+        tolerance=CONV["tolerance"],
+        floors=CONV.get("floors"),  # optional, as above
         ranges=RANGES,
     log:
         "logs/sampling_study.log",

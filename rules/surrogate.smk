@@ -13,13 +13,13 @@ rule surrogate:
         learning=report("results/surrogate/surrogate_learning_curve.png", caption="captions/learning_curve.rst",
                         category="Surrogate"),
     params:
-        surrogate=config.get("surrogate", {}),
+        surrogate=config["surrogate"],
         ranges=RANGES,
-        noise_calibration=config.get("noise_calibration", []),
-        noise_model=config.get("noise_model"),
-        counting_c=config.get("metrics", {}).get("counting_noise_c", 0.37),
+        noise_calibration=config["noise_calibration"],
+        noise_model=config.get("noise_model"),  # optional: absent, the stated counting-law SDs
+        counting_c=config["metrics"]["counting_noise_c"],
         floor=FLOOR,
-        correction=config.get("fidelity_correction") if _CORRECTION else None,  # None where it does not apply
+        correction=config["fidelity_correction"] if _CORRECTION else None,  # None where it does not apply
     log:
         "logs/surrogate.log",
     localrule: True

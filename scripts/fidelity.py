@@ -18,9 +18,9 @@ per_point, presets = study.preset_errors(cases, reference)
 knobs = study.knob_errors(read_table(sm.input.knobs)) if sm.input.get("knobs") else None
 goals = [study.goal(presets, name) for name in sm.params.goal_presets if name in set(presets["preset"])]
 
-per_point.to_csv(sm.output.per_point, index=False)
-presets.to_csv(sm.output.presets, index=False)
-(knobs if knobs is not None else pd.DataFrame()).to_csv(sm.output.knobs, index=False)
+write_text_atomically(sm.output.per_point, per_point.to_csv(index=False))
+write_text_atomically(sm.output.presets, presets.to_csv(index=False))
+write_text_atomically(sm.output.knobs, (knobs if knobs is not None else pd.DataFrame()).to_csv(index=False))
 summary = {"reference": reference, "presets": presets.to_dict("records"), "goals": goals,
            "machine": study.machine_description(cases)}
 write_text_atomically(sm.output.summary, json.dumps(summary, indent=1, default=float))

@@ -4,6 +4,7 @@ from pathlib import Path
 import pandas as pd
 
 from spreadmap import maps, sensitivity
+from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.noise_law.apply import case_noise
 from spreadmap.records import read_table
@@ -21,7 +22,8 @@ cases = case_noise(read_table(sm.input.table), p.noise_model, p.noise_calibratio
 usable = maps.usable_cases(cases)
 y = cfg["machine"]["y"]
 auto_y, scores = maps.choose_machine_y(usable, model.targets)
-scores.assign(floor=p.floor).to_csv(sm.output.y_choice, index=False)  # each candidate's information beyond MFR and its r with MFR
+# each candidate's information beyond MFR and its r with MFR
+write_text_atomically(sm.output.y_choice, scores.assign(floor=p.floor).to_csv(index=False))
 if y == "auto":
     y = auto_y
     print(f"machine map y axis: {y}" + (f" (scores beyond MFR:\n{scores.to_string()})" if len(scores) else
@@ -46,7 +48,7 @@ maps.regime_overlay(cases, model, out / "regime_overlay", p.regime, ranges=p.ran
                     **cfg["regime_plane"])
 ranking = sensitivity.sensitivity(model, list(model.targets), n=cfg["sobol_n"], draws=cfg["sobol_draws"],
                                   ranges=p.ranges)
-ranking.assign(floor=floor).to_csv(sm.output.ranking, index=False)
+write_text_atomically(sm.output.ranking, ranking.assign(floor=floor).to_csv(index=False))
 sensitivity.plot_ranking(ranking, out / "sensitivity_ranking", floor)
 with pd.option_context("display.width", 250, "display.max_columns", None):
     print(ranking.round(3).to_string())

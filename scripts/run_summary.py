@@ -2,6 +2,7 @@
 import json
 from pathlib import Path
 
+from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
 from spreadmap.summary import run_summary, summary_text
@@ -12,7 +13,7 @@ sm = snakemake  # noqa: F821
 # a set is named by its table: results/tables/<set>.csv, or results/<set>/table.csv (the converge run)
 tables = {(Path(p).parent.name if Path(p).stem == "table" else Path(p).stem): read_table(p) for p in sm.input.tables}
 summary = run_summary(tables, sm.params.regime, sm.params.floor)
-Path(sm.output.json).write_text(json.dumps(summary, indent=1))
+write_text_atomically(sm.output.json, json.dumps(summary, indent=1))
 text = summary_text(summary)
-Path(sm.output.text).write_text(text)
+write_text_atomically(sm.output.text, text)
 print(text)

@@ -1,6 +1,7 @@
 """Snakemake entry: the DEM-free sampling-design study (LDS vs lattice vs random)."""
 from spreadmap.experiments import sampling_study
 from spreadmap.experiments.plots import plot_sampling_study
+from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.surrogate import load_model
 
@@ -9,10 +10,10 @@ log_to(snakemake)  # noqa: F821
 sm = snakemake  # noqa: F821
 p = sm.params
 model = load_model(sm.input.model)
-result = sampling_study.study(predictor=model, ranges=p.ranges, seeds=p.study.get("seeds", 8),
-                              k_max=p.study.get("k_max", 10), tolerance=p.tolerance, floors=p.floors)
-result.table.to_csv(sm.output.table, index=False)
-result.summary.to_csv(sm.output.summary, index=False)
+result = sampling_study.study(predictor=model, ranges=p.ranges, seeds=p.study["seeds"],
+                              k_max=p.study["k_max"], tolerance=p.tolerance, floors=p.floors)
+write_text_atomically(sm.output.table, result.table.to_csv(index=False))
+write_text_atomically(sm.output.summary, result.summary.to_csv(index=False))
 plot_sampling_study(result.table, sm.output.figure[: -len(".png")], result.summary)
 print(result.summary.to_string())
 print(result.ratios.to_string())

@@ -6,6 +6,7 @@ import pandas as pd
 
 from spreadmap import study_rule as cv
 from spreadmap.design import TARGETS
+from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
 from spreadmap.study_rule import plots
@@ -26,17 +27,17 @@ for name, table in tables.items():
     frames.append(conv.assign(sweep=name))
     verdicts[name] = conv
     long.append(plots.partition_values(table, name, TARGETS, partitions=partitions, partition_col=partition_col))
-pd.concat(frames, ignore_index=True).to_csv(sm.output.partitions, index=False)
+write_text_atomically(sm.output.partitions, pd.concat(frames, ignore_index=True).to_csv(index=False))
 
 lds = tables["lds"][usable(tables["lds"])].sort_values("index")
 running = cv.running_statistics(lds[list(TARGETS)].to_numpy(), start=2, names=TARGETS)
-running.to_csv(sm.output.running, index=False)
+write_text_atomically(sm.output.running, running.to_csv(index=False))
 stable = cv.first_stable_n(running, tolerance=p.tolerance, window=p.window, floors=p.floors)
 summary = cv.summary(verdicts, tolerance=p.tolerance)
 summary["lds_case_by_case"] = stable
 summary["note"] = ("partitions: converged at the first N where all five statistics of MFR and PD change by less "
                    "than the tolerance from the previous partition; case by case: see lds_case_by_case")
-Path(sm.output.summary).write_text(json.dumps(summary, indent=1, default=str))
+write_text_atomically(sm.output.summary, json.dumps(summary, indent=1, default=str))
 plots.plot_distributions(pd.concat(long, ignore_index=True), out / "distributions", TARGETS, floor=p.floor)
 sweeps_stats = {name: conv for name, conv in verdicts.items()}
 sweeps_stats["lds case by case"] = running

@@ -4,6 +4,8 @@ the bad value and what is allowed, in one line."""
 from __future__ import annotations
 
 import copy
+from collections.abc import Mapping
+from functools import lru_cache
 from pathlib import Path
 
 import jsonschema
@@ -120,17 +122,16 @@ def _check_cross_keys(config: dict) -> None:
             raise ConfigError(f"config key 'noise_calibration': {error}") from None
     named = set(((config.get("points") or {}).get("named") or {}))
     for key in ("cases", "vtk"):
-        for name in (config.get("pictures") or {}).get(key, []):
+        for name in config["pictures"][key]:
             if name not in named:
                 raise ConfigError(f"config key 'pictures.{key}': value {name!r} is not allowed; "
                                   f"it must name a chosen point of points.named: {sorted(named)}")
-    if "surrogate" in config:
-        from .surrogate import make_config
+    from .surrogate import make_config
 
-        try:
-            make_config(config["surrogate"])
-        except (ValueError, KeyError) as error:
-            raise ConfigError(f"config key 'surrogate': {error}") from None
+    try:
+        make_config(config["surrogate"])
+    except (ValueError, KeyError) as error:
+        raise ConfigError(f"config key 'surrogate': {error}") from None
     from .decisions.settings import problems as decision_problems
 
     for problem in decision_problems(config):
@@ -139,13 +140,45 @@ def _check_cross_keys(config: dict) -> None:
 
     for problem in check_fidelity(config):
         raise ConfigError(problem)
-    clearance = (config.get("metrics") or {}).get("pd_clearance_d", 0.0)
+    clearance = config["metrics"]["pd_clearance_d"]  # filled from the schema by validate() above
     for name, preset in presets.items():
         if preset["window_d"] - clearance < config["scene"]["blade_thickness_d"]:
             raise ConfigError(f"config key 'presets.{name}.window_d': value {preset['window_d']} is not allowed; "
                               f"the PD box spans the window less the clearance behind the blade "
                               f"(metrics.pd_clearance_d = {clearance}) and must be at least the blade thickness "
                               f"(scene.blade_thickness_d = {config['scene']['blade_thickness_d']})")
+
+
+@lru_cache(maxsize=None)
+def section_schema(name: str) -> dict:
+    """The JSON schema of one top-level config section (read once; do not modify it)."""
+    return yaml.safe_load(SCHEMA.read_text())["properties"][name]
+
+
+def _fill_defaults(schema: dict, value: dict) -> dict:
+    for key, sub in schema.get("properties", {}).items():
+        if key not in value and "default" in sub:
+            value[key] = copy.deepcopy(sub["default"])
+        if sub.get("type") == "object" and "properties" in sub:
+            value[key] = _fill_defaults(sub, dict(value.get(key) or {}))
+    return value
+
+
+def checked(name: str, section: Mapping | None = None) -> dict:
+    """One config section validated against its schema with the schema's defaults filled (a copy;
+    {} or None: the defaults alone), for code that is handed a section, or none, rather than a
+    loaded config. ValueError names the key. (Sections that $ref the schema's definitions, e.g.
+    noise_model, cannot be checked alone.)"""
+    schema = section_schema(name)
+    value = copy.deepcopy(dict(section or {}))
+    error = jsonschema.exceptions.best_match(jsonschema.Draft202012Validator(schema).iter_errors(value))
+    if error is not None:
+        where = ".".join(str(p) for p in error.absolute_path)
+        if error.validator == "additionalProperties":
+            extra = sorted(set(error.instance) - set(error.schema.get("properties", {})))
+            raise ValueError(f"unknown {name} config key(s) {extra}; known: {sorted(error.schema['properties'])}")
+        raise ValueError(f"{name}.{where}: {error.message}")
+    return _fill_defaults(schema, value)
 
 
 def load(path: Path | str) -> dict:

@@ -15,6 +15,8 @@ import pandas as pd  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
+from .files import atomic_path, write_text_atomically  # noqa: E402
+
 N_LABEL = "number of cases N [-]"  # the x axis of every figure against the number of cases
 
 
@@ -46,10 +48,12 @@ def save_figure(fig, path_stem, data: pd.DataFrame, floor: str | None = None) ->
         stem = stem.with_suffix("")
     stem.parent.mkdir(parents=True, exist_ok=True)
     paths = {ext: stem.parent / f"{stem.name}.{ext}" for ext in ("png", "pdf", "csv")}
-    try:
-        fig.savefig(paths["png"], dpi=150, bbox_inches="tight")
-        fig.savefig(paths["pdf"], bbox_inches="tight", metadata={"CreationDate": None})
+    try:  # each file written beside its target and renamed over it (spreadmap.files): never a partial figure
+        with atomic_path(paths["png"]) as tmp:
+            fig.savefig(tmp, format="png", dpi=150, bbox_inches="tight")
+        with atomic_path(paths["pdf"]) as tmp:
+            fig.savefig(tmp, format="pdf", bbox_inches="tight", metadata={"CreationDate": None})
     finally:
         plt.close(fig)
-    pd.DataFrame(data).to_csv(paths["csv"], index=False)
+    write_text_atomically(paths["csv"], pd.DataFrame(data).to_csv(index=False))
     return paths

@@ -2,6 +2,7 @@
 the folder is flushed after the rename; an error leaves the old file and no temporary file. The
 spy below wraps the real os.fsync / os.replace (they still run) and records what they were given."""
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 
 from spreadmap.case.launcher import write_json_atomically
 from spreadmap.case.vtk_export import write_vtk
+from spreadmap.figures import new_figure, save_figure
 from spreadmap.files import atomic_path, write_text_atomically
 from spreadmap.table import write_table
 
@@ -33,8 +35,9 @@ def disk_events(monkeypatch):
     return events
 
 
-def check_durable(events, path: Path):
-    """The file's final content was flushed, then renamed over `path`, then the folder flushed."""
+def check_durable(events, path: Path, alone: bool = True):
+    """The file's final content was flushed, then renamed over `path`, then the folder flushed
+    (`alone`: and it is the only file in its folder, no temporary file left)."""
     path = path.resolve()
     renames = [i for i, e in enumerate(events) if e[0] == "replace" and e[2].resolve() == path]
     assert len(renames) == 1, events
@@ -44,7 +47,8 @@ def check_durable(events, path: Path):
     flushed = [e for e in events[:i] if e[0] == "fsync" and e[1] == tmp]
     assert flushed and flushed[-1][2] == path.read_bytes()  # the whole new content, before the rename
     assert ("fsync", path.parent, None) in events[i + 1:]  # the rename itself made durable
-    assert sorted(p.name for p in path.parent.iterdir()) == [path.name]  # no temporary file left
+    if alone:
+        assert sorted(p.name for p in path.parent.iterdir()) == [path.name]  # no temporary file left
 
 
 def test_text_is_flushed_before_the_rename_and_the_folder_after(disk_events, tmp_path):
@@ -76,3 +80,59 @@ def test_an_error_while_writing_leaves_the_old_file(tmp_path):
             tmp.write_text("half")
             raise RuntimeError("killed half-way")
     assert target.read_text() == "old" and [p.name for p in tmp_path.iterdir()] == ["a.txt"]
+
+
+def _figure():
+    fig = new_figure(4, 3)
+    fig.add_subplot(111).plot([0, 1], [1, 0])
+    return fig
+
+
+def test_a_figure_and_its_table_go_through_the_durable_helper(disk_events, tmp_path):
+    """Every map, study and case figure is saved by spreadmap.figures.save_figure: its PNG, PDF
+    and CSV each flushed beside the target and renamed over it."""
+    paths = save_figure(_figure(), tmp_path / "fig", pd.DataFrame({"a": [1.0]}))
+    for path in paths.values():
+        check_durable(disk_events, path, alone=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.csv", "fig.pdf", "fig.png"]
+
+
+def test_a_figure_that_fails_half_way_leaves_the_old_files(tmp_path):
+    old = save_figure(_figure(), tmp_path / "fig", pd.DataFrame({"a": [1.0]}))
+    before = {ext: path.read_bytes() for ext, path in old.items()}
+    fig = _figure()
+
+    def savefig(target, **kwargs):  # a run killed while the PNG is being written
+        Path(target).write_bytes(before["png"][:100])
+        raise KeyboardInterrupt("killed half-way")
+
+    fig.savefig = savefig
+    with pytest.raises(KeyboardInterrupt):
+        save_figure(fig, tmp_path / "fig", pd.DataFrame({"a": [2.0]}))
+    assert {ext: path.read_bytes() for ext, path in old.items()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig.csv", "fig.pdf", "fig.png"]
+
+
+# writes in spreadmap/ and scripts/ that are not workflow outputs, and why they stay direct
+DIRECT_WRITES = {
+    ("spreadmap/logs.py", "open(smk.log[0]"): "a job's log, streamed line by line while it runs",
+    ("spreadmap/surrogate/cli.py", "Path(smk.log[0]).write_text"): "predict's log",
+    ("spreadmap/case/launcher.py", 'open(log_path, "w")'): "the YADE run's log, streamed",
+    ("spreadmap/experiments/noisy_study.py", "to_csv(partial"): "progress of a long experiment, a scratch file",
+}
+WRITE = re.compile(r"""\.(to_csv|write_text|write_bytes|savefig)\((?!tmp\b|index=)|json\.dump\(|open\([^)]*["'][wa]b?["']""")
+
+
+def test_outputs_are_written_only_through_the_atomic_helpers():
+    """No output of the package or of a Snakemake script is written in place (a run killed
+    half-way would leave a truncated CSV, JSON or figure that looks finished); writes inside an
+    atomic_path (to its `tmp`) are the helper's own."""
+    root = Path(__file__).resolve().parent.parent
+    found = []
+    for path in sorted([*root.glob("spreadmap/**/*.py"), *root.glob("scripts/*.py")]):
+        name = str(path.relative_to(root))
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            if WRITE.search(line) and "tmp" not in line and not any(
+                    name == file and text in line for file, text in DIRECT_WRITES):
+                found.append(f"{name}:{number}: {line.strip()}")
+    assert not found, "\n".join(found)

@@ -26,6 +26,7 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from spreadmap import config as spreadmap_config  # noqa: E402
 from spreadmap.case.substrate import floor_label  # noqa: E402
 from spreadmap.metrics.noise import calibration_factors  # noqa: E402
 from spreadmap.noise_law.cells import OTHER_ARMS, published_cells  # noqa: E402
@@ -429,8 +430,8 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "noise")
     ap.add_argument("--boots", type=int, default=2000)
     a = ap.parse_args()
-    study_config = yaml.safe_load((a.docs / "study" / "config.yaml").read_text())
-    bands = study_config.get("noise_calibration") or []
+    study_config = spreadmap_config.load(a.docs / "study" / "config.yaml")
+    bands = study_config["noise_calibration"]
     stated_c = float(study_config["metrics"]["counting_noise_c"])
     floor = floor_label(study_config)
     shipped, other = published_cells(a.docs)

@@ -48,8 +48,8 @@ def recheck(table: pd.DataFrame, cfg: dict, last: dict, previous: dict, calibrat
         raise ValueError(f"the last step is after {n} cases; the cases table has {len(table)} rows")
     noisy = case_noise(table, noise_model, calibration, cfg["metrics"]["counting_noise_c"])
     return step(noisy, n, cfg["converge"], previous,
-                fit=make_map_fit(cfg.get("surrogate"), final=True), ranges=cfg["ranges"], maps_cfg=cfg.get("maps", {}),
-                lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["convergence"].get("tolerance", 0.005),
+                fit=make_map_fit(cfg["surrogate"], final=True), ranges=cfg["ranges"], maps_cfg=cfg["maps"],
+                lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["convergence"]["tolerance"],
                 floors=cfg["convergence"].get("floors"), cost=PlannedCost.from_config(cfg))
 
 
@@ -73,7 +73,7 @@ def main(argv=None) -> int:
         cfg = spreadmap_config.load(published / "config.yaml")
         table = pd.read_csv(published / "cases_converge.csv")
         previous, last = last_two_steps(published / "converge" / "steps")
-        variants = [("stated SDs", [], None), (f"{published / 'config.yaml'}", cfg.get("noise_calibration", []), None)]
+        variants = [("stated SDs", [], None), (f"{published / 'config.yaml'}", cfg["noise_calibration"], None)]
         for path in args.calibration:
             loaded = yaml.safe_load(Path(path).read_text()) or {}
             calibration, noise_model = loaded.get("noise_calibration"), loaded.get("noise_model")

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from ..config import checked
 from ..design import NAMES, bounds
-from ..surrogate.settings import BASE_TARGETS, LAYER_TARGETS, checked
+from ..surrogate.settings import BASE_TARGETS, LAYER_TARGETS
 
 
 class DecisionError(ValueError):
@@ -43,8 +44,8 @@ def span(value) -> tuple[float, float]:
 
 
 def possible_targets(config: Mapping) -> list[str]:
-    """The targets the surrogate can have under this config's ``surrogate.targets``."""
-    spec = (config.get("surrogate") or {}).get("targets", "auto")
+    """The targets the surrogate can have under this (validated) config's ``surrogate.targets``."""
+    spec = config["surrogate"]["targets"]
     return list((*BASE_TARGETS, *LAYER_TARGETS)) if spec == "auto" else list(spec)
 
 

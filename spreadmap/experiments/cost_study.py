@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..files import write_text_atomically
 from .noisy_study import run
 
 METHODS = ("lds", "active", "active_per_cpu")
@@ -78,18 +79,18 @@ def main(argv=None) -> None:
     t0, c0 = time.time(), time.process_time()
     table = run(METHODS, ["counting"], range(args.seeds), n_max=args.n_max, n_candidates=args.n_candidates,
                 log=lambda s: print(s, flush=True), partial=out / "cost_study_runs.partial.csv")
-    table.to_csv(out / "cost_study_runs.csv", index=False)
+    write_text_atomically(out / "cost_study_runs.csv", table.to_csv(index=False))
     (out / "cost_study_runs.partial.csv").unlink(missing_ok=True)
     needed = pd.concat([cpu_needed(table, t) for t in args.targets], ignore_index=True)
-    needed.to_csv(out / "cost_study_needed.csv", index=False)
+    write_text_atomically(out / "cost_study_needed.csv", needed.to_csv(index=False))
     summary = summarise(needed)
-    summary.to_csv(out / "cost_study_summary.csv", index=False)
+    write_text_atomically(out / "cost_study_summary.csv", summary.to_csv(index=False))
     from .plots import plot_cost_study
     plot_cost_study(table, args.targets, out / "cost_study")
     meta = {"command": "python -m spreadmap.experiments.cost_study " + " ".join(argv or []),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0, "seeds": args.seeds,
             "n_max": args.n_max, "targets": args.targets}
-    (out / "cost_study_run.json").write_text(json.dumps(meta, indent=1))
+    write_text_atomically(out / "cost_study_run.json", json.dumps(meta, indent=1))
     print(summary.to_string())
     print(json.dumps(meta))
 

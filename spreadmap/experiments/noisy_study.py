@@ -43,6 +43,7 @@ import numpy as np
 import pandas as pd
 
 from ..design import NAMES, to_physical, to_unit
+from ..files import write_text_atomically
 from ..loop import active
 from ..loop.map_criteria import map_grids
 from ..loop.model import make_map_fit
@@ -262,18 +263,18 @@ def main(argv=None) -> None:
     t0, c0 = time.time(), time.process_time()
     table = run(args.methods, args.noises, range(args.seeds), n_max=args.n_max, n_candidates=args.n_candidates,
                 log=lambda s: print(s, flush=True), partial=out / "noisy_study_runs.partial.csv")
-    table.to_csv(out / "noisy_study_runs.csv", index=False)
+    write_text_atomically(out / "noisy_study_runs.csv", table.to_csv(index=False))
     needed = pd.concat([cases_needed(table, t) for t in args.targets], ignore_index=True)
     summ = summarise(needed)
-    summ.to_csv(out / "noisy_study_summary.csv", index=False)
+    write_text_atomically(out / "noisy_study_summary.csv", summ.to_csv(index=False))
     rs = rmse_summary(table)
-    rs.to_csv(out / "noisy_study_rmse.csv", index=False)
+    write_text_atomically(out / "noisy_study_rmse.csv", rs.to_csv(index=False))
     from .plots import plot_noisy_study
     plot_noisy_study(table, summ, rs, out / "noisy_study")
     meta = {"command": "python -m spreadmap.experiments.noisy_study " + " ".join(argv or []),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0,
             "seeds": args.seeds, "n_max": args.n_max, "targets": args.targets}
-    (out / "noisy_study_run.json").write_text(json.dumps(meta, indent=1))
+    write_text_atomically(out / "noisy_study_run.json", json.dumps(meta, indent=1))
     print(summ.to_string())
     print(json.dumps(meta))
 

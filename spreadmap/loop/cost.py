@@ -27,9 +27,10 @@ from typing import Iterable, Mapping
 import numpy as np
 import pandas as pd
 
+from ..config import checked
 from ..design import NAMES
 
-DEFAULT_LAW = {"ln_a": -18.615, "b_particles": 1.092, "b_steps": 1.324}
+DEFAULT_LAW = checked("converge")["cost_law"]  # the schema's converge.cost_law, for a config without one
 
 
 def planned_work(points: np.ndarray, config: Mapping, preset: str) -> np.ndarray:

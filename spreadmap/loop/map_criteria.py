@@ -65,6 +65,7 @@ import pandas as pd
 from scipy import stats
 from sklearn.model_selection import KFold
 
+from ..config import checked
 from ..design import NAMES, bounds
 from ..study_rule.rule import DEFAULT_FLOORS, STATISTICS
 from .model import FitFunction, MapModel, table_data, usable_rows
@@ -129,11 +130,10 @@ def map_grids(maps_cfg: Mapping | None = None, ranges: dict | None = None, box_k
     * ``box``: box_k^4 cell centres of the design box (no face is over-weighted);
     * ``machine``: the machine map's n_h x n_v grid of h and v at its f and d;
     * ``powder``: the powder maps' n_d x n_f grid of d and f at their h and v.
-    Fixed values and sizes from config ``maps:`` (SPEC defaults otherwise).
+    Fixed values and sizes from config ``maps:``, the schema's defaults filled.
     """
-    maps_cfg = maps_cfg or {}
-    mach = {"f": 0.45, "d_um": 45.0, "n_h": 5, "n_v": 5, **(maps_cfg.get("machine") or {})}
-    powd = {"h_um": 57.0, "v_mm_s": 6.1, **(maps_cfg.get("powder") or {})}
+    maps_cfg = checked("maps", maps_cfg)
+    mach, powd = maps_cfg["machine"], maps_cfg["powder"]
     low, high = bounds(ranges)
     ix = {n: i for i, n in enumerate(NAMES)}
 

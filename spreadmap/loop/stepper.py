@@ -40,7 +40,7 @@ import pandas as pd
 from ..case.identity import rounded
 from ..design import NAMES
 from ..sampling import halton
-from ..study_rule.rule import batches_until_converged
+from ..study_rule.rule import DEFAULT_TOLERANCE, batches_until_converged
 from ..table import usable
 from . import active, map_criteria
 from .model import FitFunction, make_map_fit
@@ -95,7 +95,7 @@ def _study_rule(table: pd.DataFrame, targets: Sequence[str], s: Mapping, n: int,
 def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | None = None,
          fit: FitFunction | None = None, ranges: dict | None = None, maps_cfg: Mapping | None = None,
          lds_seed: int = 42, targets: Sequence[str] = ("mfr", "pd"),
-         tolerance: float = 0.005, floors: Mapping | None = None,
+         tolerance: float = DEFAULT_TOLERANCE, floors: Mapping | None = None,
          cost: Callable[[np.ndarray], np.ndarray] | None = None,
          models_out: dict | None = None) -> dict[str, Any]:
     """The decision after ``n`` cases: stop, or the next batch (see the module docstring).

@@ -12,8 +12,13 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..config import checked
 from ..design import NAMES, bounds
 from ..surrogate.settings import LAYER_TARGETS
+
+# config `maps:` at the schema's defaults (schemas/config.schema.yaml): the maps' keyword defaults, for
+# callers without a config (the workflow passes its config's values)
+MAP_DEFAULTS = checked("maps")
 
 
 def values(given, n: int, name: str, ranges=None) -> np.ndarray:

@@ -21,11 +21,14 @@ from . import grids
 from .labels import end_label, which_labelled
 from .style import DEFINITIONS, HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
 
+MACHINE = grids.MAP_DEFAULTS["machine"]
 
-def machine_map(model, stem, y: str = "pd", f: float = 0.45, d_um: float = 45.0, n_h: int = 5, n_v: int = 5,
+
+def machine_map(model, stem, y: str = "pd", f: float = MACHINE["f"], d_um: float = MACHINE["d_um"],
+                n_h: int = MACHINE["n_h"], n_v: int = MACHINE["n_v"],
                 h_values=None, v_values=None, ranges=None, support=None, max_labels: int = 7,
                 y_note: str | None = None, floor: str | None = None) -> MapResult:
-    support = support or {"max_distance": 1.5, "max_sd_ratio": 1.0}
+    support = support or grids.MAP_DEFAULTS["support"]
     h = grids.values(h_values, n_h, "h_um", ranges)
     v = grids.values(v_values, n_v, "v_mm_s", ranges)
     grid = grids.evaluate(model, grids.grid_frame(f=f, d_um=d_um, h_um=h, v_mm_s=v), ["mfr", y], support)

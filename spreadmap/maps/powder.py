@@ -21,13 +21,13 @@ from . import grids
 from .labels import end_label, right_labels
 from .style import HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
 
-DEFAULT_SUPPORT = {"max_distance": 1.5, "max_sd_ratio": 1.0}
+POWDER = grids.MAP_DEFAULTS["powder"]
 
 
-def powder_band_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: float = 6.1, n_d: int = 41,
+def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"], n_d: int = 41,
                     n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
                     seed: int = 0, floor: str | None = None) -> MapResult:
-    support = support or DEFAULT_SUPPORT
+    support = support or grids.MAP_DEFAULTS["support"]
     d = grids.values(d_values, n_d, "d_um", ranges)
     fv = grids.values(f_values, n_f, "f", ranges)
     targets = ["mfr", y]
@@ -85,10 +85,10 @@ def powder_band_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: floa
     return MapResult(paths, table, {"note": note, "effect": effect})
 
 
-def powder_cluster_map(model, stem, y: str = "pd", h_um: float = 57.0, v_mm_s: float = 6.1, n_d: int = 5,
+def powder_cluster_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"], n_d: int = 5,
                        n_f: int = 7, d_values=None, f_values=None, ranges=None, support=None,
                        floor: str | None = None) -> MapResult:
-    support = support or DEFAULT_SUPPORT
+    support = support or grids.MAP_DEFAULTS["support"]
     d = grids.values(d_values, n_d, "d_um", ranges)
     fv = grids.values(f_values, n_f, "f", ranges)
     grid = grids.evaluate(model, grids.grid_frame(f=fv, d_um=d, h_um=h_um, v_mm_s=v_mm_s), ["mfr", y], support)

@@ -20,6 +20,8 @@ from ..figures import new_figure, save_figure
 from . import grids
 from .style import MapResult, fmt, support_note
 
+PLANE = grids.MAP_DEFAULTS["regime_plane"]
+
 REGIMES = ("normal", "jamming", "short_feed")
 COLOURS = {"normal": "tab:green", "jamming": "tab:red", "short_feed": "tab:orange"}
 MARKERS = {"normal": "o", "jamming": "X", "short_feed": "s"}
@@ -39,9 +41,9 @@ def regime_counts(dem: np.ndarray, model: np.ndarray) -> pd.DataFrame:
 
 
 def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
-                   f: float = 0.3, v_mm_s: float = 10.0, n_d: int = 60, n_h: int = 40, ranges=None,
+                   f: float = PLANE["f"], v_mm_s: float = PLANE["v_mm_s"], n_d: int = 60, n_h: int = 40, ranges=None,
                    support=None, floor: str | None = None) -> MapResult:
-    support = support or {"max_distance": 1.5, "max_sd_ratio": 1.0}
+    support = support or grids.MAP_DEFAULTS["support"]
     known = cases["regime"].isin(REGIMES).to_numpy()
     data = cases.loc[known].copy()
     missing = [t for t in grids.REGIME_TARGETS if t not in model.targets]

@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from ..case.scene import DENSEST_PACKING
+from ..config import checked, section_schema
 from .flow import heap_h2, layer_density, mass_flow_ratio, measured_span, powder, sphere_volume, window_passed_volume
 from .layer import layer_quality
 from .noise import batch_means_sd, counting_sd, flow_trend
@@ -22,18 +23,21 @@ NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_pa
                "thickness_ratio_sd",
                # the heap ahead of the blade at the window's start and end, in h^2 (issue 32)
                "heap_start_h2", "heap_end_h2")
-LAYER_BLOCK_D = 2.0  # default block length (in d) of the layer measures' jackknife noise (.layer)
+# metrics.layer_block_d's default (the schema's): block length (in d) of the layer measures' jackknife noise (.layer)
+LAYER_BLOCK_D = checked("metrics")["layer_block_d"]
 SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batches", "surface_grid_d")
 # stability.min_heap_h2's default (schemas/config.schema.yaml; docs/guide/01-model.md, "Metrics"):
 # sound shipped cases end their window with 0.97 h^2 or more ahead of the blade (98 main-job
 # cases, h/d 1.1-7.1), piles that ran down with ~0.2-0.5 h^2 (estimated)
-MIN_HEAP_H2 = 0.7
+MIN_HEAP_H2 = section_schema("stability")["properties"]["min_heap_h2"]["default"]
 # stability.max_wedge_overlap_ratio's default (the schema's): a sphere the moving blade presses
 # (the wedge, peak_overlap_wedged) is not a time-step matter and is not held to max_overlap_ratio,
 # but no wedge of a sound step goes this deep: the largest of ~1,400 published cases is 0.174 R
 # (docs/study/cases_converge.csv); a step too large goes further (0.92-0.95 x critical: 1.25-1.48 R, but the
 # whole bed blew up with it; no step was seen unstable near the blade alone: tests/test_stability_yade.py)
-MAX_WEDGE_OVERLAP = 0.25
+MAX_WEDGE_OVERLAP = section_schema("stability")["properties"]["max_wedge_overlap_ratio"]["default"]
+# stability.max_flow_decline_z's default (the schema's): a flow that fell by more counting-noise SEs ran down
+MAX_FLOW_DECLINE_Z = section_schema("stability")["properties"]["max_flow_decline_z"]["default"]
 
 
 def _powder_snapshot(snapshot: dict) -> dict:
@@ -193,7 +197,7 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
     if wedge_max is not None and new["peak_overlap_wedged"] > wedge_max:  # nan (no split) compares False
         flags.append(f"peak overlap {new['peak_overlap_wedged']:.3g} R at spheres the blade presses > {wedge_max} R: "
                      f"beyond any wedge of a sound step")
-    z_max = stability.get("max_flow_decline_z", 3.0)
+    z_max = stability.get("max_flow_decline_z", MAX_FLOW_DECLINE_Z)
     heap_min = stability.get("min_heap_h2", MIN_HEAP_H2)
     if z_max is not None and new["flow_trend_z"] < -z_max:  # nan (no series) compares False
         flags.append(flow_fall_reason(new["flow_trend"], new["flow_trend_z"], new["heap_end_h2"], heap_min))

@@ -20,10 +20,15 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..config import checked, section_schema
 from ..metrics.noise import NOISE_SD_COLUMNS, calibrated_noise
 from .cells import COUNT
 
 MODEL_TARGETS = tuple(COUNT)  # mfr, pd
+# the schema's defaults, for callers without a config: metrics.counting_noise_c, and the law's
+# reference count and h/d (noise_model.n_ref, h_over_d_ref) for a law handed without them
+COUNTING_NOISE_C = checked("metrics")["counting_noise_c"]
+LAW_REFS = {key: section_schema("noise_model")["properties"][key]["default"] for key in ("n_ref", "h_over_d_ref")}
 
 
 def check_sections(noise_model: dict | None, noise_calibration: list | None) -> None:
@@ -75,12 +80,13 @@ def modelled_sd(table: pd.DataFrame, target: str, noise_model: dict, counting_c:
     n_eff = np.maximum(n, 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         per_sphere = np.where((n > 0) & (value > 0), value / n, stated / (counting_c * np.sqrt(n_eff)))
-    rel = law_rel_sd(n_eff, h_over_d, law, float(noise_model.get("n_ref", 150.0)), float(noise_model.get("h_over_d_ref", 2.0)))
+    refs = {**LAW_REFS, **noise_model}
+    rel = law_rel_sd(n_eff, h_over_d, law, float(refs["n_ref"]), float(refs["h_over_d_ref"]))
     return np.abs(per_sphere) * n_eff * rel
 
 
 def case_noise(table: pd.DataFrame, noise_model: dict | None, noise_calibration: list | None,
-               counting_c: float = 0.37) -> pd.DataFrame:
+               counting_c: float = COUNTING_NOISE_C) -> pd.DataFrame:
     """A copy of a results table whose noise SDs are those every analysis should weigh the cases by.
 
     MFR's and PD's from the fitted law where `noise_model` gives one, the others (and all of them

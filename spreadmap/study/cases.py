@@ -64,8 +64,7 @@ def loop_cases(config: dict, steps: list[dict], scene_sha256: str | None = None)
     """The main job's loop so far as (case id, label), in run order, from its step records (the
     converge checkpoints, ordered by n): the LDS start, then each step's next batch; labels as the
     workflow's converge table (`sweep` converge, `index`, `batch`, `lds`)."""
-    grow = config.get("converge") or {}
-    start, batch = int(grow.get("start", 32)), int(grow.get("batch", 16))
+    start, batch = int(config["converge"]["start"]), int(config["converge"]["batch"])  # a loaded config: filled
     preset = ((config.get("sweeps") or {}).get("lds") or {}).get("preset") or config["preset"]
     seed, sha = config["scene"]["seed"], template_sha256() if scene_sha256 is None else scene_sha256
     ids = [c.case_id for c in planned_cases(config, lds_points=start, scene_sha256=sha) if c.sweep == "lds"][:start]

@@ -21,6 +21,7 @@ from scipy.stats import qmc
 
 from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
+from spreadmap.files import write_text_atomically
 from spreadmap.loop.stepper import step_number
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
@@ -111,11 +112,12 @@ def _study_rule(study: Path) -> list[str]:
     the LDS partitions of config.yaml whose every case has run, the lattices whose every case has
     run; the largest relative change of the five statistics of MFR and PD from the partition
     before."""
-    from spreadmap.study_rule.rule import convergence_table, first_converged
+    from spreadmap.study_rule.rule import DEFAULT_TOLERANCE, convergence_table, first_converged
 
     cfg = _read_yaml(study / "config.yaml")
     conv = cfg.get("convergence") or {}
-    tol, floors = conv.get("tolerance", 0.005), conv.get("floors")
+    # a published config (not validated: it may predate the schema) without a tolerance ran the schema's
+    tol, floors = conv.get("tolerance", DEFAULT_TOLERANCE), conv.get("floors")
     lines = []
     lds = _read_csv(study / "cases_lds.csv")
     partitions = ((cfg.get("sweeps") or {}).get("lds") or {}).get("partitions", [])
@@ -322,7 +324,7 @@ def _trends(study: Path, ranges: dict | None) -> list[str]:
                                       high[NAMES.index("h_um")] / low[NAMES.index("d_um")], 6)}
     for variable, levels in grids.items():
         effect = main_effect(model, ranges, variable, levels)
-        effect.to_csv(study / f"trend_{variable}.csv", index=False)
+        write_text_atomically(study / f"trend_{variable}.csv", effect.to_csv(index=False))
         for target in model.targets:
             ends = effect.dropna(subset=[target]).iloc[[0, -1]]
             a, b = ends.to_dict("records")

@@ -71,6 +71,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as _st
 
+from ..config import checked
 from ..table import usable as usable_rows
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")
@@ -82,7 +83,7 @@ DEFAULT_FLOORS: dict[str, float] = {
     "kurtosis": 1.0,
     "skewness": 1.0,
 }
-DEFAULT_TOLERANCE = 0.005
+DEFAULT_TOLERANCE = checked("convergence")["tolerance"]  # the schema's convergence.tolerance, for callers without a config
 NOT_CONVERGED = "not converged within the cases run"
 DEFAULT_TARGETS: tuple[str, ...] = ("mfr", "pd")
 

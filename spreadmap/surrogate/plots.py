@@ -19,6 +19,7 @@ import pandas as pd
 from scipy.stats import norm
 
 from ..figures import new_figure, save_figure
+from ..files import write_text_atomically
 from . import validation
 
 COLOURS = {"gp": "tab:blue", "mlp": "tab:orange"}
@@ -125,8 +126,8 @@ def plot_all(result, outdir, prefix: str = "surrogate", floor: str | None = None
     ``floor`` (spreadmap.case.substrate.floor_label) the figures name the floor the cases ran on."""
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    result.validation.to_csv(outdir / f"{prefix}_metrics.csv", index=False)
-    result.study_runs.to_csv(outdir / f"{prefix}_study_runs.csv", index=False)
+    write_text_atomically(outdir / f"{prefix}_metrics.csv", result.validation.to_csv(index=False))
+    write_text_atomically(outdir / f"{prefix}_study_runs.csv", result.study_runs.to_csv(index=False))
     return {
         "parity": plot_parity(result.validation, result.oof, outdir / f"{prefix}_parity", floor),
         "r2_vs_neurons": plot_study(result.study_summary, result.validation, outdir / f"{prefix}_r2_vs_neurons", floor),
