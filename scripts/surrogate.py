@@ -27,7 +27,10 @@ if correction is not None:
                                                     "factors": correction.factors, "source": correction.source}
     print(f"map model's means: {correction.label(result.model.targets)}")
 save_model(result.model, sm.output.model)
-plot_all(result, Path(sm.output.model).parent, prefix="surrogate", floor=sm.params.floor)
+out = Path(sm.output.model).parent
+result.validation.to_csv(sm.output.metrics, index=False)  # what the figures draw, as numbers
+result.study_runs.to_csv(out / "surrogate_study_runs.csv", index=False)
+plot_all(result, out, prefix="surrogate", floor=sm.params.floor)
 with pd.option_context("display.width", 250, "display.max_columns", None):
     print(result.validation.round(4).to_string())
     print(result.study_summary.round(4).to_string())
