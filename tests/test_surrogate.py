@@ -1,4 +1,4 @@
-"""The surrogate (spreadmap.surrogate) and scripts/predict.py, against synthetic cases whose truth
+"""The surrogate (spreadmap.surrogate) and tools/predict.py, against synthetic cases whose truth
 and noise are known (tests/synthetic_cases.py). No YADE."""
 from __future__ import annotations
 
@@ -24,7 +24,8 @@ from spreadmap.surrogate.cli import cli_main
 from spreadmap.surrogate.training_rows import select
 
 ROOT = Path(__file__).resolve().parents[1]
-SCRIPT = ROOT / "scripts" / "predict.py"
+TOOL = ROOT / "tools" / "predict.py"
+SCRIPT = ROOT / "scripts" / "predict.py"  # the rule predict's entry
 PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv" / "bin" / "python").exists() else sys.executable
 QUICK = {"cv_repeats": 1, "gp_restarts": 0, "learning_curve": False, "mlp_sizes": [4], "mlp_alphas": [1.0],
          "ensemble_members": 4, "neurons": [2, 4], "seeds": [0, 1, 2]}
@@ -310,7 +311,7 @@ def test_cli_reads_the_readme_points_format(saved, tmp_path):
     pts.write_text("name,f,d_um,h_um,v_mm_s,preset,seed\nnormal,0.30,30,65,10,default,1\n"
                    "small,0.30,12,65,10,,\n")
     out = tmp_path / "pred.csv"
-    r = subprocess.run([PYTHON, str(SCRIPT), str(saved), "--csv", str(pts), "--out", str(out)], cwd=ROOT,
+    r = subprocess.run([PYTHON, str(TOOL), str(saved), "--csv", str(pts), "--out", str(out)], cwd=ROOT,
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     pred = pd.read_csv(out)
