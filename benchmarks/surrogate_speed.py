@@ -3,7 +3,7 @@
 design points, and the latency of a call for a single point.
 
 The model is the one the main job saves (results/surrogate/model.joblib; ``--model``), loaded and
-called exactly as scripts/predict.py does (spreadmap.surrogate.load_model, then
+called exactly as tools/predict.py does (spreadmap.surrogate.load_model, then
 spreadmap.surrogate.predict, which validates the points, warns about those beyond the data and
 returns per target the mean, the model SD and the SD of a new run). The N points (``-n``, default 100000) are
 drawn uniformly inside the configuration's ``ranges``; out-of-range warnings are silenced while

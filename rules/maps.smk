@@ -14,6 +14,7 @@ rule maps:
            for name in MAP_FIGURES},
         ranking="results/maps/sensitivity_ranking_table.csv",
         y_choice="results/maps/machine_y_choice.csv",
+        regime_plane="results/maps/regime_overlay_plane.csv",  # the regime figure's (d, h) plane; its CSV: the cases
     params:
         maps=MAPS,
         floor=MAP_BASIS,

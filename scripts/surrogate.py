@@ -3,6 +3,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.noise_law.apply import case_noise
 from spreadmap.records import read_table
@@ -27,7 +28,11 @@ if correction is not None:
                                                     "factors": correction.factors, "source": correction.source}
     print(f"map model's means: {correction.label(result.model.targets)}")
 save_model(result.model, sm.output.model)
-plot_all(result, Path(sm.output.model).parent, prefix="surrogate", floor=sm.params.floor)
+out = Path(sm.output.model).parent
+out.mkdir(parents=True, exist_ok=True)
+write_text_atomically(sm.output.metrics, result.validation.to_csv(index=False))  # what the figures draw, as numbers
+write_text_atomically(out / "surrogate_study_runs.csv", result.study_runs.to_csv(index=False))
+plot_all(result, out, prefix="surrogate", floor=sm.params.floor)
 with pd.option_context("display.width", 250, "display.max_columns", None):
     print(result.validation.round(4).to_string())
     print(result.study_summary.round(4).to_string())

@@ -49,6 +49,7 @@ def test_main_job_writes_every_analysis_output(finished_run):
                  "maps/parallel_coordinates", "maps/regime_overlay", "maps/sensitivity_ranking", "pictures/demo"]:
         for ext in ("png", "pdf", "csv"):
             assert (wf / f"{stem}.{ext}").stat().st_size > 0, f"{stem}.{ext}"
+    assert (wf / "maps" / "regime_overlay_plane.csv").stat().st_size > 0  # the regime figure's (d, h) plane
     summary = json.loads((wf / "convergence" / "summary.json").read_text())
     assert {"lds", "lattice"} <= set(summary["sweeps"])
     # the main job's summary covers the converge run and the chosen points; the sweeps have their own

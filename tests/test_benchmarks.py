@@ -4,6 +4,7 @@ main_job.py as a dry run only. About half a minute on a busy 2-core machine."""
 from __future__ import annotations
 
 import csv
+import json
 import re
 import subprocess
 import sys
@@ -247,3 +248,19 @@ def test_cost_map_anchors_two_scenes_to_their_measured_cases(tmp_path):
     law = [row for row in result["rows"] if row["scale"] == "law" and row["preset"] == "default"]
     assert law[0]["mean"] == pytest.approx(law[1]["mean"])  # the same tree plans the same cases
     assert 0 < law[0]["median"] <= law[0]["p90"] <= law[0]["max"]
+
+
+@pytest.mark.parametrize("script, args, written", [
+    ("noisy_study.py", ["--methods", "lds", "lattice", "--noises", "mult7", "--targets", "0.05"],
+     ["noisy_study_runs.csv", "noisy_study_summary.csv", "noisy_study_rmse.csv", "noisy_study.png"]),
+    ("cost_study.py", ["--targets", "0.05"],
+     ["cost_study_runs.csv", "cost_study_needed.csv", "cost_study_summary.csv", "cost_study.png"])])
+def test_sampling_studies_run_from_benchmarks(tmp_path, script, args, written):
+    """The noisy and cost sampling studies (spreadmap.experiments) at their smallest: one seed, the
+    LDS start only; every table and the figure written, the command recorded."""
+    r = run(script, "--out", tmp_path, "--seeds", 1, "--n-max", 32, "--n-candidates", 128, *args, timeout=120)
+    assert r.returncode == 0, r.stderr[-3000:]
+    for name in written:
+        assert (tmp_path / name).stat().st_size > 0, name
+    meta = json.loads((tmp_path / script.replace(".py", "_run.json")).read_text())
+    assert meta["command"].startswith(f"benchmarks/{script} --out ")

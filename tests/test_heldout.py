@@ -144,9 +144,9 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
     assert all(s["inside"] >= 9 for s in summary), summary
     assert "seed means inside their 95% intervals" in r.stdout
     # the study's summary states the check from these files, and names every point outside
-    from spreadmap.study.summary import summary_markdown
+    from spreadmap.study.summary import summary_markdown, trends
 
-    text = summary_markdown(tmp_path)
+    text = summary_markdown(tmp_path, trends(tmp_path))
     for t in ("mfr", "pd"):
         inside = int(scored.loc[scored["target"] == t, "inside"].sum())
         assert f"- {t}: {inside} of 12 points' seed means inside their 95 % prediction intervals" in text

@@ -9,7 +9,7 @@ from scipy.stats import norm
 from spreadmap import maps
 from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
-from spreadmap.maps import grids
+from spreadmap.maps import grids, machine, powder, regimes
 from spreadmap.surrogate.models import GPModel
 from spreadmap.surrogate.saved_model import SurrogateModel
 
@@ -39,6 +39,37 @@ def half_model():
     """Trained only on small particles (d <= 25 um): the large-d half of every map is beyond the data."""
     pts = syn.halton_points(256)
     return surrogate(syn.table(points=pts[pts[:, 1] <= 25][:64], rel=0.07))
+
+
+class ClosedForm:
+    """A stand-in surrogate in closed form: each target's mean a known function (syn.TRUTH for MFR
+    and PD; coverage and layer thickness / h follow MFR), its model SD growing with friction, a
+    constant noise SD, the distance to the data |d - 20 um| / 10 um case spacings, and each draw
+    the mean plus the model SD times one standard normal shared by every point of the draw."""
+
+    targets = ("mfr", "pd", "coverage", "thickness_ratio")
+    NOISE = {"mfr": 0.015, "pd": 0.01, "coverage": 0.04, "thickness_ratio": 0.05}
+    correction = None
+
+    def mean(self, X, t):
+        X = np.asarray(X, float)
+        if t in syn.TRUTH:
+            return syn.TRUTH[t](X)
+        return 0.3 + 1.2 * syn.truth_mfr(X) if t == "coverage" else 0.2 + 2.0 * syn.truth_mfr(X)
+
+    def model_sd(self, X, t):
+        return (0.004 + 0.05 * (np.asarray(X, float)[:, 0] - 0.15)) * self.NOISE[t] / 0.015
+
+    def predict_stats(self, X):
+        return {t: (self.mean(X, t), self.model_sd(X, t), np.hypot(self.model_sd(X, t), self.NOISE[t]))
+                for t in self.targets}
+
+    def data_distance(self, X):
+        return np.abs(np.asarray(X, float)[:, 1] - 20.0) / 10.0
+
+    def draws(self, X, n, seed=0, targets=None):
+        z = np.random.default_rng(seed).standard_normal((n, 1))
+        return {t: self.mean(X, t)[None, :] + self.model_sd(X, t)[None, :] * z for t in (targets or self.targets)}
 
 
 def files_ok(res):
@@ -218,3 +249,113 @@ def test_the_noise_cross_goes_to_the_corner_the_map_leaves_empty():
     assert emptiest_corner(ax, t, t) == (0.08, 0.9)
     assert emptiest_corner(ax, np.full(40, 0.1), t) == (0.5, 0.9)  # a column at the left edge: the right side
     plt.close(fig)
+
+
+def test_powder_band_numbers_are_the_closed_form():
+    """powder_band_grid's table on a closed-form model, against the same numbers computed here: the
+    (f, d) grid with f varying slowest, each target's mean, model SD, noise SD and their ratio, the
+    support (distance <= 1.5 and model SD <= noise SD for MFR and PD), and per d the change from the
+    lowest to the highest f, whose joint draws differ by (change of the model SD) x z: a 95 %
+    interval change + (sd_high - sd_low) x (-1.96, 1.96) and P(increase) Phi(change / |sd change|)."""
+    cf = ClosedForm()
+    d, fv = np.array([12.0, 20.0, 31.0, 44.0]), np.array([0.15, 0.25, 0.45])
+    table = powder.powder_band_grid(cf, "pd", h_um=65, v_mm_s=10, d_values=d, f_values=fv, support=SUPPORT,
+                                    draws=20000)
+    assert table[["f", "d_um"]].to_numpy().tolist() == [[f, x] for f in fv for x in d]
+    assert (table["h_um"] == 65).all() and (table["v_mm_s"] == 10).all()
+    X = table[list(NAMES)].to_numpy()
+    ok = np.abs(X[:, 1] - 20) / 10 <= 1.5
+    for t in ("mfr", "pd"):
+        msd = (0.004 + 0.05 * (X[:, 0] - 0.15)) * cf.NOISE[t] / 0.015
+        np.testing.assert_allclose(table[t], syn.TRUTH[t](X), rtol=1e-12)
+        np.testing.assert_allclose(table[f"{t}_model_sd"], msd, rtol=1e-12)
+        np.testing.assert_allclose(table[f"{t}_noise_sd"], cf.NOISE[t], rtol=1e-9)
+        np.testing.assert_allclose(table[f"{t}_sd_ratio"], msd / cf.NOISE[t], rtol=1e-9)
+        ok &= msd <= cf.NOISE[t]
+    assert table["supported"].tolist() == ok.tolist()
+    assert 0 < ok.sum() < len(ok)  # the check sees both sides: far in d, and a model SD above the noise at f = 0.45
+    for t in ("mfr", "pd"):
+        low, high = (np.column_stack([np.full(4, f), d, np.full(4, 65.0), np.full(4, 10.0)]) for f in (0.15, 0.45))
+        change = syn.TRUTH[t](high) - syn.TRUTH[t](low)
+        sd_change = 0.05 * 0.30 * cf.NOISE[t] / 0.015
+        per_d = table.groupby("d_um").first()  # every f of a d carries its d's change
+        np.testing.assert_allclose(per_d[f"{t}_change"], change, rtol=1e-12)
+        np.testing.assert_allclose(per_d[f"{t}_change_low"], change - 1.96 * sd_change, atol=0.05 * sd_change)
+        np.testing.assert_allclose(per_d[f"{t}_change_high"], change + 1.96 * sd_change, atol=0.05 * sd_change)
+        np.testing.assert_allclose(per_d[f"{t}_p_increase"], norm.cdf(change / sd_change), atol=0.01)
+
+
+def test_powder_cluster_numbers_are_the_closed_form():
+    cf = ClosedForm()
+    grid = powder.powder_cluster_grid(cf, "coverage", h_um=60, v_mm_s=8, d_values=[15, 45], f_values=[0.2, 0.3, 0.4],
+                                      support=SUPPORT)
+    X = grid[list(NAMES)].to_numpy()
+    assert X.tolist() == [[f, d, 60.0, 8.0] for f in (0.2, 0.3, 0.4) for d in (15.0, 45.0)]
+    np.testing.assert_allclose(grid["mfr"], syn.truth_mfr(X), rtol=1e-12)
+    np.testing.assert_allclose(grid["coverage"], 0.3 + 1.2 * syn.truth_mfr(X), rtol=1e-12)
+    np.testing.assert_allclose(grid["coverage_run_sd"], np.hypot(cf.model_sd(X, "coverage"), 0.04), rtol=1e-12)
+    np.testing.assert_allclose(grid["data_distance"], np.abs(X[:, 1] - 20) / 10)
+    assert "pd" not in grid  # the targets drawn: MFR and y
+
+
+RULES_CF = {"jam_mfr_max": 0.15, "short_feed_coverage_min": 0.55, "short_feed_thickness_min": 0.6}
+
+
+def test_regime_numbers_are_the_closed_form():
+    """regime_tables on a closed-form model: each regime's probability from the predictive normal of
+    MFR, coverage and thickness / h (mean, run SD), computed here with scipy, at the cases' own
+    settings (the case without a regime left out) and over the (d, h) plane, d varying slowest."""
+    cf = ClosedForm()
+    pts = syn.halton_points(9, seed=5)
+    cases = pd.DataFrame(pts, columns=list(NAMES)).assign(case_id=[f"c{i}" for i in range(9)], mfr=0.3, pd=0.5,
+                                                          regime=["normal", "jamming", "short_feed"] * 3)
+    cases.loc[4, "regime"] = ""
+    table, plane = regimes.regime_tables(cases, cf, RULES_CF, f=0.3, v_mm_s=10, n_d=7, n_h=5, support=SUPPORT)
+
+    def probabilities(X):
+        def below(t, threshold):
+            return norm.cdf((threshold - cf.mean(X, t)) / np.hypot(cf.model_sd(X, t), cf.NOISE[t]))
+        jam = below("mfr", 0.15)
+        fine = (1 - below("coverage", 0.55)) * (1 - below("thickness_ratio", 0.6))
+        return np.column_stack([(1 - jam) * fine, jam, (1 - jam) * (1 - fine)])
+
+    assert list(table["case_id"]) == [f"c{i}" for i in range(9) if i != 4]
+    X = table[list(NAMES)].to_numpy()
+    P = probabilities(X)
+    np.testing.assert_allclose(table[["p_normal", "p_jamming", "p_short_feed"]], P, rtol=1e-9, atol=1e-15)
+    assert list(table["regime_pred"]) == [maps.REGIMES[k] for k in P.argmax(axis=1)]
+    np.testing.assert_allclose(table["h_over_d"], X[:, 2] / X[:, 1])
+    d, h = np.linspace(10, 50, 7), np.linspace(55, 75, 5)
+    assert plane[["d_um", "h_um"]].to_numpy().tolist() == [[a, b] for a in d for b in h]
+    Q = probabilities(plane[list(NAMES)].to_numpy())
+    np.testing.assert_allclose(plane[["p_normal", "p_jamming", "p_short_feed"]], Q, rtol=1e-9, atol=1e-15)
+    assert len(set(Q.argmax(axis=1))) == 3  # the plane holds every regime
+
+
+def test_maps_redraw_from_their_csv(tmp_path):
+    """Each map drawn again from its CSV (and the regime map's plane CSV) read back from disk is the
+    same figure, saved with the same CSV, byte for byte."""
+    cf = ClosedForm()
+    first, again = tmp_path / "first", tmp_path / "again"
+    band = maps.powder_band_map(cf, first / "band", h_um=65, v_mm_s=10, n_d=7, n_f=3, draws=50, support=SUPPORT,
+                                floor=ROUGH)
+    cluster = maps.powder_cluster_map(cf, first / "cluster", y="coverage", n_d=3, n_f=4, support=SUPPORT, floor=ROUGH)
+    mach = maps.machine_map(cf, first / "machine", f=0.3, d_um=20, n_h=3, n_v=4, support=SUPPORT, floor=ROUGH)
+    cases = pd.DataFrame(syn.halton_points(12, seed=2), columns=list(NAMES)).assign(
+        mfr=0.3, pd=0.5, regime=["normal", "jamming", "short_feed", ""] * 3)
+    reg = maps.regime_overlay(cases, cf, first / "regime", RULES_CF, n_d=9, n_h=6, support=SUPPORT, floor=ROUGH)
+    assert reg.paths["plane"] == first / "regime_plane.csv"
+    assert set(pd.read_csv(reg.paths["plane"])["floor"]) == {ROUGH}
+
+    grid = pd.read_csv(mach.paths["csv"])
+    redrawn = [(band, powder.draw_powder_band_map(pd.read_csv(band.paths["csv"]), again / "band", "pd", SUPPORT, ROUGH)),
+               (cluster, powder.draw_powder_cluster_map(pd.read_csv(cluster.paths["csv"]), again / "cluster", "coverage",
+                                                        SUPPORT, ROUGH)),
+               (mach, machine.draw_machine_map(grid, again / "machine", "pd", 0.3, 20.0, np.unique(grid["h_um"]),
+                                               np.unique(grid["v_mm_s"]), SUPPORT, floor=ROUGH)),
+               (reg, regimes.draw_regime_overlay(pd.read_csv(reg.paths["csv"]), pd.read_csv(reg.paths["plane"]),
+                                                 again / "regime", 3, SUPPORT, ROUGH))]
+    for old, new in redrawn:
+        for ext in ("png", "csv"):
+            assert new.paths[ext].read_bytes() == old.paths[ext].read_bytes(), old.paths[ext]
+    assert redrawn[3][1].info["counts"].equals(reg.info["counts"]) and reg.info["excluded"] == 3

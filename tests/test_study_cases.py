@@ -241,20 +241,17 @@ def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(publ
                                                                                for k in cfg["sweeps"]["lattice"]["k"])
 
 
-def test_published_summary_recomputes_from_the_published_files(published, tmp_path):
+def test_published_summary_recomputes_from_the_published_files(published):
     """summary.md and the trend tables are what spreadmap.study.summary makes of docs/study's
-    committed cases, steps, surrogate and maps today (in a copy: the summary writes trend_*.csv)."""
-    import shutil
-
-    from spreadmap.study.summary import summary_markdown
+    committed cases, steps, surrogate and maps today."""
+    from spreadmap.study.summary import summary_markdown, trends
 
     cfg, _ = published
-    copy_ = tmp_path / "study"
-    shutil.copytree(DOCS, copy_)
-    text = summary_markdown(copy_, cfg.get("ranges"))
-    assert text == (DOCS / "summary.md").read_text()
-    for trend in sorted(DOCS.glob("trend_*.csv")):
-        pd.testing.assert_frame_equal(pd.read_csv(copy_ / trend.name), pd.read_csv(trend), rtol=1e-9)
+    effects = trends(DOCS, cfg.get("ranges"))
+    assert summary_markdown(DOCS, effects) == (DOCS / "summary.md").read_text()
+    assert sorted(f"trend_{v}.csv" for v in effects) == sorted(p.name for p in DOCS.glob("trend_*.csv"))
+    for variable, effect in effects.items():
+        pd.testing.assert_frame_equal(effect, pd.read_csv(DOCS / f"trend_{variable}.csv"), rtol=1e-9)
 
 
 @pytest.mark.parametrize("check, cases", [("heldout", "cases_heldout.csv"), ("heldout2", "cases_heldout2.csv")])

@@ -7,11 +7,16 @@ import pandas as pd
 
 from spreadmap.design import NAMES
 from spreadmap.sensitivity.draws import FunctionDraws
-from spreadmap.study.summary import NOT_YET, main_effect, summary_markdown
+from spreadmap.study.summary import NOT_YET, main_effect, summary_markdown, trends
 
 RANGES = {"f": {"min": 0.15, "max": 0.45}, "d_um": {"min": 10, "max": 50}, "h_um": {"min": 55, "max": 75},
           "v_mm_s": {"min": 5, "max": 15}}
 F, D, H, V = (NAMES.index(n) for n in ("f", "d_um", "h_um", "v_mm_s"))
+
+
+def summary(study, ranges=None) -> str:
+    """The study's summary.md as tools/publish_study.py makes it: the trends, then the text."""
+    return summary_markdown(study, trends(study, ranges))
 
 
 def known(X):
@@ -37,6 +42,22 @@ def test_partial_dependence_recovers_known_effects():
     np.testing.assert_allclose(f["mfr_high"], f["mfr"], atol=1e-12)
 
 
+def test_the_trends_section_is_drawn_from_the_effects_it_is_given(tmp_path):
+    """The summary renders the trends it is handed (the ends of each effect, targets in their
+    order); trends() of a folder without a surrogate is empty, and the section says not yet."""
+    model = FunctionDraws(known, ("mfr", "pd"))
+    effects = {"v_mm_s": main_effect(model, RANGES, "v_mm_s", [5, 10, 15], n_base=256)}
+    lines = summary_markdown(tmp_path, effects).splitlines()
+    mfr, pd_ = (next(x for x in lines if x.startswith(f"- {t} vs v_mm_s: ")) for t in ("mfr", "pd"))
+    assert lines.index(mfr) < lines.index(pd_)
+    a, b = effects["v_mm_s"].iloc[0], effects["v_mm_s"].iloc[-1]
+    assert mfr == (f"- mfr vs v_mm_s: {a['mfr']:.3f} ({a['mfr_low']:.3f}-{a['mfr_high']:.3f}) at 5 to "
+                   f"{b['mfr']:.3f} ({b['mfr_low']:.3f}-{b['mfr_high']:.3f}) at 15")
+    assert trends(tmp_path, RANGES) == {}
+    assert "partial dependence, 95 % bands)\n" + NOT_YET in summary_markdown(tmp_path, {})
+    assert not list(tmp_path.iterdir())  # the summary writes nothing
+
+
 def test_the_summary_answers_from_the_files_and_says_what_has_not_run(tmp_path):
     pd.DataFrame([{"sweep": "lds", "planned": 81, "finished": 40, "ok": 39, "failed": 1, "cpu_hours": 1.25}]).to_csv(
         tmp_path / "progress.csv", index=False)
@@ -53,7 +74,7 @@ def test_the_summary_answers_from_the_files_and_says_what_has_not_run(tmp_path):
                    "flag_reason": reasons[i]}
                   for i, (r, d, v) in enumerate([("jamming", 50, 5), ("jamming", 45, 6), ("normal", 20, 10)])]
                  ).to_csv(tmp_path / "cases_lds.csv", index=False)
-    text = summary_markdown(tmp_path, RANGES)
+    text = summary(tmp_path, RANGES)
     assert "lds: 40 of 81 cases finished (1 failed), 1.25 CPU hours" in text
     assert "the map criteria held at **96 cases**" in text
     assert "The study's rule on the sweeps: " + NOT_YET in text
@@ -90,7 +111,7 @@ def test_the_studys_rule_so_far_uses_only_complete_partitions(tmp_path):
     for t in ("mfr", "pd"):
         a, b = five(cases[t][:4].to_numpy()), five(cases[t][:8].to_numpy())
         change = max(change, *(abs(b[s][0] - a[s][0]) / max(abs(a[s][0]), a[s][1]) for s in a))
-    text = summary_markdown(tmp_path)
+    text = summary(tmp_path)
     assert f"largest change at N = 8: {100 * change:.1f} %" in text
     assert "N = 12" not in text and "not within 8 cases" in text
 
@@ -102,7 +123,7 @@ def test_a_loop_still_running_is_reported_from_its_last_step(tmp_path):
     steps.mkdir(parents=True)
     for n in (32, 48, 112):
         (steps / f"step_{n}.json").write_text(json.dumps({"n": n, "summary": f"after {n} cases: criteria not met yet"}))
-    text = summary_markdown(tmp_path)
+    text = summary(tmp_path)
     assert "still running: 3 steps so far" in text and "after 112 cases: criteria not met yet" in text
     assert "after 48 cases" not in text
 
@@ -110,9 +131,9 @@ def test_a_loop_still_running_is_reported_from_its_last_step(tmp_path):
 def test_the_summary_names_the_floor_of_the_studys_config(tmp_path):
     """The study's config (config.yaml beside its files) names the floor under the title; a study
     folder without one says nothing of a floor."""
-    assert "Floor:" not in summary_markdown(tmp_path)
+    assert "Floor:" not in summary(tmp_path)
     (tmp_path / "config.yaml").write_text("scene:\n  substrate:\n    kind: rough\n    jitter: 0.25\n")
-    lines = summary_markdown(tmp_path).splitlines()
+    lines = summary(tmp_path).splitlines()
     assert lines[2] == ("Floor: rough floor (previous layer, jitter 0.25 R); gap h nominal, from its tops "
                         "(effective gap h + 0.23 d).")
 
@@ -140,11 +161,11 @@ def test_the_summary_says_jamming_was_not_reached_and_how_close_the_nearest_case
     cases = pd.read_csv(tmp_path / "cases_lds.csv")
     cases.loc[2, "flagged"] = True  # a flagged case's MFR is not a measurement to quote
     cases.to_csv(tmp_path / "cases_lds.csv", index=False)
-    text = summary_markdown(tmp_path, RANGES)
+    text = summary(tmp_path, RANGES)
     assert ("- jamming: none of 3 cases (the rule: MFR < 0.05); the lowest MFR of a usable case 0.310, at h/d 2.00, "
             "v 12.0 mm/s, f 0.40") in text
     # where jamming was reached the line counts those cases instead
-    assert "jamming: none" not in summary_markdown(_with_regime(tmp_path, "jamming"), RANGES)
+    assert "jamming: none" not in summary(_with_regime(tmp_path, "jamming"), RANGES)
 
 
 def _with_regime(study, regime):
@@ -169,16 +190,16 @@ def test_the_summary_states_the_map_models_intervals_by_h_over_d(tmp_path):
     pd.DataFrame({"case_id": ["a", "b"], "h_um": [60.0, 60.0], "d_um": [40.0, 15.0], "status": "ok", "regime": "normal",
                   "v_mm_s": 10.0, "flagged": False}).to_csv(
         tmp_path / "cases_converge.csv", index=False)
-    line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp), its intervals"))
+    line = next(x for x in summary(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp), its intervals"))
     assert ("1.5-2: 1 cases, error 0.0100 against the cases' noise 0.0150, interval SD 0.0200 (the model's 0.0100), "
             "mean z^2 0.25, 100 % inside") in line
     assert ">= 3: 1 cases, error 0.0100" in line and "0-1.5" not in line and "left out" not in line
     # the coverage line says what its interval supports: 100 % (100-100 %) of 95 % intervals is too wide
-    line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp, the maps): CV RMSE"))
+    line = next(x for x in summary(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp, the maps): CV RMSE"))
     assert line.endswith("the intervals are too wide (their coverage's CI lies above 95 %)"), line
     # a case of the training table in no published cases table (the main job trains on more): left out, said so
     pd.DataFrame(rows + [{**rows[0], "case_id": "z"}]).to_csv(tmp_path / "surrogate" / "surrogate_parity.csv", index=False)
-    line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp), its intervals"))
+    line = next(x for x in summary(tmp_path, RANGES).splitlines() if x.startswith("- mfr (gp), its intervals"))
     assert "; 1 cases in no published table left out): " in line and "1.5-2: 1 cases" in line
 
 
@@ -196,7 +217,7 @@ def test_matched_size_compares_the_lattice_and_the_lds_prefix_with_the_largest_l
         table.assign(case_id=[f"{name}{i}" for i in range(len(table))], regime="normal", h_um=60.0, d_um=30.0,
                      v_mm_s=10.0).to_csv(tmp_path / f"cases_{name}.csv", index=False)
     (tmp_path / "config.yaml").write_text(json.dumps({"sweeps": {"lds": {"partitions": [81, 256]}, "lattice": {"k": [3, 4]}}}))
-    line = next(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- Matched size N = 81"))
+    line = next(x for x in summary(tmp_path, RANGES).splitlines() if x.startswith("- Matched size N = 81"))
 
     def stats5(x):
         return {"mean": np.mean(x), "std": np.std(x, ddof=1), "median": np.median(x),
@@ -214,14 +235,14 @@ def test_matched_size_compares_the_lattice_and_the_lds_prefix_with_the_largest_l
     assert f"mean MFR {np.mean(lds['mfr'][:81]):.4f}, 0.4500, {np.mean(lds['mfr']):.4f}" in line
     assert f"would scatter by {np.std(lds['mfr'], ddof=1) / 9:.4f} and {np.std(lds['pd'], ddof=1) / 9:.4f}" in line
     # the 4^4 lattice has not run: no line for it
-    assert "N = 256" not in "".join(x for x in summary_markdown(tmp_path, RANGES).splitlines() if x.startswith("- Matched"))
+    assert "N = 256" not in "".join(x for x in summary(tmp_path, RANGES).splitlines() if x.startswith("- Matched"))
     # once it has: at LDS 256's own size the lattice alone against it, and the study's rule from lattice to lattice
     lattice4 = pd.DataFrame({"k": 4, "sweep": "lattice", "status": "ok", "flagged": False,
                              "mfr": np.tile([0.38, 0.43, 0.47, 0.52], 64), "pd": np.tile([0.32, 0.38, 0.42, 0.48], 64)})
     both = pd.concat([lattice, lattice4], ignore_index=True)
     both.assign(case_id=[f"lattice{i}" for i in range(len(both))], regime="normal", h_um=60.0, d_um=30.0,
                 v_mm_s=10.0).to_csv(tmp_path / "cases_lattice.csv", index=False)
-    text = summary_markdown(tmp_path, RANGES).splitlines()
+    text = summary(tmp_path, RANGES).splitlines()
     line = next(x for x in text if x.startswith("- Matched size N = 256"))
     lat4 = max(worst(lattice4[t].to_numpy(), lds[t].to_numpy()) for t in ("mfr", "pd"))
     assert f"the 4^4 lattice by at most {100 * lat4:.1f} %" in line and "LDS's first" not in line
@@ -246,7 +267,7 @@ def test_the_workflows_convergence_summary_adds_to_the_rule_from_the_cases(tmp_p
         "tolerance": 0.005, "sweeps": {"lds": {"converged_n": None, "cases_run": 64, "status": "not converged"}},
         "ratio_lattice_to_lds": {"value": None, "kind": "undefined", "text": "lds: not converged; no ratio"},
         "lds_case_by_case": {"first_holds": 40, "stable_from": None, "n_last": 64}}))
-    text = summary_markdown(tmp_path, RANGES)
+    text = summary(tmp_path, RANGES)
     assert "on the LDS: largest change at N = 64: " in text and "**not within 64 cases**." in text
     assert "- The workflow's convergence summary: lds: not converged; no ratio" in text
     assert "- The study's rule (five statistics within 0.5 %), lds: not converged (64 cases run)." in text
@@ -277,14 +298,14 @@ def test_a_second_heldout_check_is_reported_beside_the_first(tmp_path):
 
     inside_first = scored(tmp_path / "heldout", 0.0)
     (tmp_path / "heldout2").mkdir()
-    text = summary_markdown(tmp_path, RANGES)
+    text = summary(tmp_path, RANGES)
     assert f"- mfr: {inside_first} of 12 points' seed means inside" in text
     second = text.split("- The second check, of the shipped surrogate")[1]
     assert second.splitlines()[1] == "  - " + NOT_YET
     (tmp_path / "heldout2").rmdir()
     inside_second = scored(tmp_path / "heldout2", 0.02)  # predictions 2 SDs of one run off: most points outside
     assert inside_second < 6
-    second = summary_markdown(tmp_path, RANGES).split("- The second check, of the shipped surrogate")[1]
+    second = summary(tmp_path, RANGES).split("- The second check, of the shipped surrogate")[1]
     assert f"  - mfr: {inside_second} of 12 points' seed means inside" in second
     assert second.count("  - outside: ") == 12 - inside_second
     # predictions 2 SDs off: the z^2 test says the stated SDs are too small, in words

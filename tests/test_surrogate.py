@@ -1,4 +1,4 @@
-"""The surrogate (spreadmap.surrogate) and scripts/predict.py, against synthetic cases whose truth
+"""The surrogate (spreadmap.surrogate) and tools/predict.py, against synthetic cases whose truth
 and noise are known (tests/synthetic_cases.py). No YADE."""
 from __future__ import annotations
 
@@ -24,7 +24,8 @@ from spreadmap.surrogate.cli import cli_main
 from spreadmap.surrogate.training_rows import select
 
 ROOT = Path(__file__).resolve().parents[1]
-SCRIPT = ROOT / "scripts" / "predict.py"
+TOOL = ROOT / "tools" / "predict.py"
+SCRIPT = ROOT / "scripts" / "predict.py"  # the rule predict's entry
 PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv" / "bin" / "python").exists() else sys.executable
 QUICK = {"cv_repeats": 1, "gp_restarts": 0, "learning_curve": False, "mlp_sizes": [4], "mlp_alphas": [1.0],
          "ensemble_members": 4, "neurons": [2, 4], "seeds": [0, 1, 2]}
@@ -242,7 +243,25 @@ def test_plots_written(result, tmp_path):
         assert "(previous layer, jitter 0.5 R)" in pdf_text(files[name]["pdf"])  # the figures name their floor
         table = pd.read_csv(files[name]["csv"])  # (an empty learning curve: the column, no rows)
         assert table.columns[-1] == "floor" and set(table["floor"]) <= {floor}
-    assert (tmp_path / "surrogate_metrics.csv").is_file()
+    assert not (tmp_path / "surrogate_metrics.csv").exists()  # the tables are the caller's to write
+
+
+def test_parity_redraws_from_its_csvs(result, tmp_path):
+    """The parity figure's numbers are validation.parity_table's (each case's out-of-fold mean over
+    the repeats, here recomputed with pandas), and the figure drawn again from its CSV and the
+    metrics CSV read back from disk is the same, byte for byte."""
+    from spreadmap.surrogate.plots import plot_parity
+
+    table = validation.parity_table(result.validation, result.oof)
+    gp = result.oof[(result.oof["model"] == "gp") & (result.oof["target"] == "pd")]
+    pd_rows = table[table["target"] == "pd"].set_index("case_id")
+    np.testing.assert_allclose(pd_rows["mean"], gp.groupby("case_id")["mean"].mean().loc[pd_rows.index], rtol=1e-12)
+    assert set(table["model"]) == {"gp"} and list(dict.fromkeys(table["target"])) == ["mfr", "pd"]
+    result.validation.to_csv(tmp_path / "metrics.csv", index=False)
+    first = plot_parity(result.validation, table, tmp_path / "first" / "parity")
+    again = plot_parity(pd.read_csv(tmp_path / "metrics.csv"), pd.read_csv(first["csv"]), tmp_path / "again" / "parity")
+    for ext in ("png", "csv"):
+        assert again[ext].read_bytes() == first[ext].read_bytes(), ext
 
 
 @pytest.mark.parametrize("caption", ["parity", "r2_vs_neurons", "learning_curve"])
@@ -292,7 +311,7 @@ def test_cli_reads_the_readme_points_format(saved, tmp_path):
     pts.write_text("name,f,d_um,h_um,v_mm_s,preset,seed\nnormal,0.30,30,65,10,default,1\n"
                    "small,0.30,12,65,10,,\n")
     out = tmp_path / "pred.csv"
-    r = subprocess.run([PYTHON, str(SCRIPT), str(saved), "--csv", str(pts), "--out", str(out)], cwd=ROOT,
+    r = subprocess.run([PYTHON, str(TOOL), str(saved), "--csv", str(pts), "--out", str(out)], cwd=ROOT,
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     pred = pd.read_csv(out)

@@ -28,9 +28,10 @@ sys.path.insert(0, str(ROOT))
 from spreadmap import config as cfgmod  # noqa: E402
 from spreadmap.case.identity import readable_part  # noqa: E402
 from spreadmap.case.render import template_sha256  # noqa: E402
+from spreadmap.files import write_text_atomically  # noqa: E402
 from spreadmap.study.cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress  # noqa: E402
 from spreadmap.study.checksums import write_manifest  # noqa: E402
-from spreadmap.study.summary import summary_markdown  # noqa: E402
+from spreadmap.study.summary import summary_markdown, trends  # noqa: E402
 from spreadmap.table import write_table  # noqa: E402
 
 COPIES = {  # source under the workflow directory -> destination under --out
@@ -100,8 +101,11 @@ def main(argv=None) -> int:
                         args.out / "cases_converge.csv")
     if missing:
         print("not yet run:", ", ".join(missing))
-    text = summary_markdown(args.out, config.get("ranges"))
-    (args.out / "summary.md").write_text(text)
+    effects = trends(args.out, config.get("ranges"))
+    for variable, effect in effects.items():
+        write_text_atomically(args.out / f"trend_{variable}.csv", effect.to_csv(index=False))
+    text = summary_markdown(args.out, effects)
+    write_text_atomically(args.out / "summary.md", text)
     print(text)
     print(f"checksums: {write_manifest(args.out)}")
     return 0

@@ -12,21 +12,12 @@ and candidates), so their difference is paired by seed.
 Reported (``summarise``): per design and map-RMSE target, the CPU hours each seed needed to reach
 the target (the CPU of the first checkpoint at or below it; censored at the budget), their median
 and range over seeds, and per seed the ratio of ``active``'s CPU to ``active_per_cpu``'s.
-
-    python -m spreadmap.experiments.cost_study --out docs/sampling --seeds 8 --n-max 256
+The study is run by benchmarks/cost_study.py.
 """
 from __future__ import annotations
 
-import argparse
-import json
-import time
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
-
-from ..files import write_text_atomically
-from .noisy_study import run
 
 METHODS = ("lds", "active", "active_per_cpu")
 
@@ -64,37 +55,3 @@ def summarise(needed: pd.DataFrame, baseline: str = "active", candidate: str = "
                         "paired_seeds": int(len(ratio))})
         rows.append(row)
     return pd.DataFrame(rows)
-
-
-def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", required=True, help="output directory")
-    ap.add_argument("--seeds", type=int, default=8)
-    ap.add_argument("--n-max", type=int, default=256)
-    ap.add_argument("--n-candidates", type=int, default=2048)
-    ap.add_argument("--targets", type=float, nargs="+", default=[0.01, 0.007, 0.005])
-    args = ap.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    t0, c0 = time.time(), time.process_time()
-    table = run(METHODS, ["counting"], range(args.seeds), n_max=args.n_max, n_candidates=args.n_candidates,
-                log=lambda s: print(s, flush=True), partial=out / "cost_study_runs.partial.csv")
-    write_text_atomically(out / "cost_study_runs.csv", table.to_csv(index=False))
-    (out / "cost_study_runs.partial.csv").unlink(missing_ok=True)
-    needed = pd.concat([cpu_needed(table, t) for t in args.targets], ignore_index=True)
-    write_text_atomically(out / "cost_study_needed.csv", needed.to_csv(index=False))
-    summary = summarise(needed)
-    write_text_atomically(out / "cost_study_summary.csv", summary.to_csv(index=False))
-    from .plots import plot_cost_study
-    plot_cost_study(table, args.targets, out / "cost_study")
-    meta = {"command": "python -m spreadmap.experiments.cost_study " + " ".join(argv or []),
-            "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0, "seeds": args.seeds,
-            "n_max": args.n_max, "targets": args.targets}
-    write_text_atomically(out / "cost_study_run.json", json.dumps(meta, indent=1))
-    print(summary.to_string())
-    print(json.dumps(meta))
-
-
-if __name__ == "__main__":
-    import sys
-    main(sys.argv[1:])

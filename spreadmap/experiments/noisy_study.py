@@ -28,13 +28,11 @@ model's mean against the known truth, over the map grids, falls to a target.
   powder plane), also reported on the box alone.  ``n_needed``: the first checkpoint at which
   the map RMSE is at or below the target; censored (NaN) when not reached within the budget.
 
-The full study is run once (``python -m spreadmap.experiments.noisy_study --out docs/sampling``);
+The full study is run once (``benchmarks/noisy_study.py --out docs/sampling``);
 tests and the workflow run a small version.
 """
 from __future__ import annotations
 
-import argparse
-import json
 import time
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
@@ -43,7 +41,6 @@ import numpy as np
 import pandas as pd
 
 from ..design import NAMES, to_physical, to_unit
-from ..files import write_text_atomically
 from ..loop import active
 from ..loop.map_criteria import map_grids
 from ..loop.model import make_map_fit
@@ -246,39 +243,3 @@ def rmse_summary(table: pd.DataFrame) -> pd.DataFrame:
     g = table.groupby(["method", "noise", "n"])["map_rmse"]
     return pd.DataFrame({"median": g.median(), "q25": g.quantile(0.25), "q75": g.quantile(0.75),
                          "runs": g.size()}).reset_index()
-
-
-def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", required=True, help="output directory (table CSVs, figure, run.json)")
-    ap.add_argument("--seeds", type=int, default=8)
-    ap.add_argument("--n-candidates", type=int, default=2048)
-    ap.add_argument("--n-max", type=int, default=128)
-    ap.add_argument("--targets", type=float, nargs="+", default=[0.01, 0.007, 0.005])
-    ap.add_argument("--methods", nargs="+", default=["lds", "random", "lattice", "active"])
-    ap.add_argument("--noises", nargs="+", default=list(NOISE_MODELS))
-    args = ap.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    t0, c0 = time.time(), time.process_time()
-    table = run(args.methods, args.noises, range(args.seeds), n_max=args.n_max, n_candidates=args.n_candidates,
-                log=lambda s: print(s, flush=True), partial=out / "noisy_study_runs.partial.csv")
-    write_text_atomically(out / "noisy_study_runs.csv", table.to_csv(index=False))
-    needed = pd.concat([cases_needed(table, t) for t in args.targets], ignore_index=True)
-    summ = summarise(needed)
-    write_text_atomically(out / "noisy_study_summary.csv", summ.to_csv(index=False))
-    rs = rmse_summary(table)
-    write_text_atomically(out / "noisy_study_rmse.csv", rs.to_csv(index=False))
-    from .plots import plot_noisy_study
-    plot_noisy_study(table, summ, rs, out / "noisy_study")
-    meta = {"command": "python -m spreadmap.experiments.noisy_study " + " ".join(argv or []),
-            "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0,
-            "seeds": args.seeds, "n_max": args.n_max, "targets": args.targets}
-    write_text_atomically(out / "noisy_study_run.json", json.dumps(meta, indent=1))
-    print(summ.to_string())
-    print(json.dumps(meta))
-
-
-if __name__ == "__main__":
-    import sys
-    main(sys.argv[1:])

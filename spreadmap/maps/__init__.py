@@ -1,8 +1,10 @@
 """Processing design maps from the surrogate, with their uncertainty; the DEM sample and regimes.
 
 ``grids`` computes (evaluated design grids, support, regime probabilities, the effect of friction,
-the machine map's y axis); one module per figure draws: ``machine`` (machine map), ``powder``
-(band and cluster maps), ``parallel`` (parallel coordinates of the DEM cases), ``regimes``;
+the machine map's y axis); one module per figure: ``machine`` (machine map), ``powder``
+(band and cluster maps), ``parallel`` (parallel coordinates of the DEM cases), ``regimes``. The
+machine, powder and regime maps compute their numbers apart from drawing them (``powder_band_grid``
+then ``draw_powder_band_map``, ...), so a figure can be redrawn from its CSV;
 ``labels`` places line labels, ``style`` holds what the figures share. Every figure takes
 ``floor`` (spreadmap.case.substrate.floor_label of the config its cases ran with) and names it above its
 title and in its CSV (spreadmap.figures.save_figure).

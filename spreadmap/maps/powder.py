@@ -7,11 +7,16 @@
   so any crossing of them) is not resolved by the data.
 * ``powder_cluster_map`` (b): in the MFR-y plane, one cluster of points per diameter, its points
   the friction values, each with a cross of one model SD; open marks beyond the data.
+
+Each map's numbers come from ``powder_band_grid`` / ``powder_cluster_grid`` (no figure) and its
+figure from ``draw_powder_band_map`` / ``draw_powder_cluster_map`` (the figure and those numbers as
+its CSV); ``powder_band_map`` and ``powder_cluster_map`` do both.
 """
 from __future__ import annotations
 
 import matplotlib
 import numpy as np
+import pandas as pd
 from matplotlib import colors as mcolors
 from matplotlib.lines import Line2D
 
@@ -22,27 +27,49 @@ from .labels import end_label, right_labels
 from .style import HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
 
 POWDER = grids.MAP_DEFAULTS["powder"]
+DEFAULT_SUPPORT = grids.MAP_DEFAULTS["support"]
+EFFECT = ("change", "change_low", "change_high", "p_increase")  # grids.f_effect's columns per target
 
 
 def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"], n_d: int = 41,
                     n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
                     seed: int = 0, floor: str | None = None) -> MapResult:
-    support = support or grids.MAP_DEFAULTS["support"]
+    support = support or DEFAULT_SUPPORT
+    table = powder_band_grid(model, y, h_um, v_mm_s, n_d, n_f, d_values, f_values, ranges, support, draws, seed)
+    return draw_powder_band_map(table, stem, y, support, floor)
+
+
+def powder_band_grid(model, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"],
+                     n_d: int = 41, n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
+                     seed: int = 0) -> pd.DataFrame:
+    """The numbers of map (a): the (f, d) grid at (h, v), f varying slowest, evaluated for MFR and y
+    (grids.evaluate), each row with the change of both from the lowest to the highest f at its d
+    and that change's 95 % interval from joint draws (grids.f_effect)."""
+    support = support or DEFAULT_SUPPORT
     d = grids.values(d_values, n_d, "d_um", ranges)
     fv = grids.values(f_values, n_f, "f", ranges)
     targets = ["mfr", y]
     grid = grids.evaluate(model, grids.grid_frame(f=fv, d_um=d, h_um=h_um, v_mm_s=v_mm_s), targets, support)
     effect = grids.f_effect(model, targets, h_um, v_mm_s, d, fv[0], fv[-1], draws=draws, seed=seed)
+    return grid.merge(effect, on="d_um", how="left")
+
+
+def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor: str | None = None) -> MapResult:
+    """Map (a) from ``powder_band_grid``'s table (or its CSV read back); saved with that table."""
+    targets = ["mfr", y]
+    fv, d = np.unique(table["f"]), np.unique(table["d_um"])
+    h_um, v_mm_s = float(table["h_um"].iloc[0]), float(table["v_mm_s"].iloc[0])
+    effect = table[table["f"] == fv[0]][["d_um"] + [f"{t}_{c}" for t in targets for c in EFFECT]].reset_index(drop=True)
     shape = (len(fv), len(d))
-    ok = grid["supported"].to_numpy().reshape(shape)
+    ok = table["supported"].to_numpy().reshape(shape)
     cmap = matplotlib.colormaps["plasma"]
     fcol = [cmap(0.8 * k / max(len(fv) - 1, 1)) for k in range(len(fv))]
     fig = new_figure(12.5, 8.2)
     axes = fig.subplots(2, 2, height_ratios=[2.2, 1], sharex=True)
     for col, t in enumerate(targets):
         ax = axes[0, col]
-        z = grid[t].to_numpy().reshape(shape)
-        s = grid[f"{t}_model_sd"].to_numpy().reshape(shape)
+        z = table[t].to_numpy().reshape(shape)
+        s = table[f"{t}_model_sd"].to_numpy().reshape(shape)
         for k in (0, len(fv) - 1):
             ax.fill_between(d, z[k] - 1.96 * s[k], z[k] + 1.96 * s[k], color=fcol[k], alpha=0.18, lw=0)
         for k in range(len(fv)):
@@ -79,8 +106,7 @@ def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_
     axes[0, 0].legend(handles=handles, fontsize=7.5, loc="best")
     fig.suptitle(f"Powder map (a): friction f = {fmt(fv[0])}-{fmt(fv[-1])} as the diameter varies, "
                  f"at h = {fmt(h_um)} um, v = {fmt(v_mm_s)} mm/s", fontsize=11)
-    note = support_note(fig, grid["supported"].to_numpy(), support)
-    table = grid.merge(effect, on="d_um", how="left")
+    note = support_note(fig, table["supported"].to_numpy(), support)
     paths = save_figure(fig, stem, table, floor)
     return MapResult(paths, table, {"note": note, "effect": effect})
 
@@ -88,10 +114,24 @@ def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_
 def powder_cluster_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"], n_d: int = 5,
                        n_f: int = 7, d_values=None, f_values=None, ranges=None, support=None,
                        floor: str | None = None) -> MapResult:
-    support = support or grids.MAP_DEFAULTS["support"]
+    support = support or DEFAULT_SUPPORT
+    grid = powder_cluster_grid(model, y, h_um, v_mm_s, n_d, n_f, d_values, f_values, ranges, support)
+    return draw_powder_cluster_map(grid, stem, y, support, floor)
+
+
+def powder_cluster_grid(model, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"],
+                        n_d: int = 5, n_f: int = 7, d_values=None, f_values=None, ranges=None, support=None) -> pd.DataFrame:
+    """The numbers of map (b): the (f, d) grid at (h, v), f varying slowest, evaluated for MFR and y."""
+    support = support or DEFAULT_SUPPORT
     d = grids.values(d_values, n_d, "d_um", ranges)
     fv = grids.values(f_values, n_f, "f", ranges)
-    grid = grids.evaluate(model, grids.grid_frame(f=fv, d_um=d, h_um=h_um, v_mm_s=v_mm_s), ["mfr", y], support)
+    return grids.evaluate(model, grids.grid_frame(f=fv, d_um=d, h_um=h_um, v_mm_s=v_mm_s), ["mfr", y], support)
+
+
+def draw_powder_cluster_map(grid: pd.DataFrame, stem, y: str, support: dict, floor: str | None = None) -> MapResult:
+    """Map (b) from ``powder_cluster_grid``'s grid (or its CSV read back); saved with that grid."""
+    fv, d = np.unique(grid["f"]), np.unique(grid["d_um"])
+    h_um, v_mm_s = float(grid["h_um"].iloc[0]), float(grid["v_mm_s"].iloc[0])
     shape = (len(fv), len(d))
     X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
     sx, sy = grid["mfr_model_sd"].to_numpy().reshape(shape), grid[f"{y}_model_sd"].to_numpy().reshape(shape)

@@ -7,6 +7,10 @@ distribution of MFR and PD), drawn as the most probable regime's colour with con
 P(jamming) and P(short feed) at 0.1, 0.5 and 0.9; beyond the data hatched; the line h = d (a gap of
 one particle). ``counts``: DEM regime against the most probable regime at the cases' own settings
 (the final model on its training cases: a consistency check, not a validation).
+
+``regime_tables`` computes the numbers (no figure), ``draw_regime_overlay`` draws them;
+``regime_overlay`` does both and writes the plane's numbers beside the figure (``<stem>_plane.csv``;
+the figure's own CSV holds the cases).
 """
 from __future__ import annotations
 
@@ -17,6 +21,7 @@ from matplotlib.lines import Line2D
 
 from ..design import BY_NAME, NAMES
 from ..figures import new_figure, save_figure
+from ..files import atomic_path
 from . import grids
 from .style import MapResult, fmt, support_note
 
@@ -26,6 +31,10 @@ REGIMES = ("normal", "jamming", "short_feed")
 COLOURS = {"normal": "tab:green", "jamming": "tab:red", "short_feed": "tab:orange"}
 MARKERS = {"normal": "o", "jamming": "X", "short_feed": "s"}
 NAMES_LONG = {"normal": "normal extrusion", "jamming": "jamming", "short_feed": "short feed"}
+# the plane's numbers written beside the figure: the point, its support, the predictive normal of
+# each target the rule reads (mean, SD of a new run) and the regime probabilities drawn from them
+PLANE_COLUMNS = [*NAMES, "data_distance", "supported", *(c for t in grids.REGIME_TARGETS for c in (t, f"{t}_run_sd")),
+                 "p_normal", "p_jamming", "p_short_feed"]
 
 
 def most_probable(frame: pd.DataFrame) -> np.ndarray:
@@ -43,6 +52,23 @@ def regime_counts(dem: np.ndarray, model: np.ndarray) -> pd.DataFrame:
 def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
                    f: float = PLANE["f"], v_mm_s: float = PLANE["v_mm_s"], n_d: int = 60, n_h: int = 40, ranges=None,
                    support=None, floor: str | None = None) -> MapResult:
+    """The figure (``stem``.png/.pdf, the cases' table as ``stem``.csv) and the plane's numbers
+    beside it (``stem``_plane.csv)."""
+    support = support or grids.MAP_DEFAULTS["support"]
+    table, plane = regime_tables(cases, model, rules, f, v_mm_s, n_d, n_h, ranges, support)
+    excluded = len(cases) - len(table)
+    res = draw_regime_overlay(table, plane, stem, excluded, support, floor)
+    res.paths["plane"] = res.paths["csv"].with_name(f"{res.paths['csv'].stem}_plane.csv")
+    with atomic_path(res.paths["plane"]) as tmp:
+        plane[PLANE_COLUMNS].assign(**({"floor": floor} if floor else {})).to_csv(tmp, index=False)
+    return res
+
+
+def regime_tables(cases: pd.DataFrame, model, rules: dict, f: float = PLANE["f"], v_mm_s: float = PLANE["v_mm_s"], n_d: int = 60,
+                  n_h: int = 40, ranges=None, support=None) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The numbers of the regime overlay: (the cases with a DEM regime, each with its h/d, the
+    regime probabilities at its own settings and the most probable regime; the (d, h) plane at
+    (f, v), d varying slowest, evaluated for the rule's targets with each regime's probability)."""
     support = support or grids.MAP_DEFAULTS["support"]
     known = cases["regime"].isin(REGIMES).to_numpy()
     data = cases.loc[known].copy()
@@ -56,12 +82,22 @@ def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
         data[c] = at_cases[c].to_numpy()
     data["regime_pred"] = most_probable(at_cases)
     data["h_over_d"] = data["h_um"] / data["d_um"]
-    counts = regime_counts(data["regime"].to_numpy(), data["regime_pred"].to_numpy())
-
     d = grids.values(None, n_d, "d_um", ranges)
     h = grids.values(None, n_h, "h_um", ranges)
     plane = grids.regime_probabilities(
         grids.evaluate(model, grids.grid_frame(f=f, d_um=d, h_um=h, v_mm_s=v_mm_s), targets, support), rules)
+    cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
+        "h_over_d", "mfr", "pd", "regime", "p_normal", "p_jamming", "p_short_feed", "regime_pred"]
+    return data[[c for c in cols if c in data]].reset_index(drop=True), plane
+
+
+def draw_regime_overlay(data: pd.DataFrame, plane: pd.DataFrame, stem, excluded: int, support: dict,
+                        floor: str | None = None) -> MapResult:
+    """The figure from ``regime_tables``' two tables (or their CSVs read back); ``excluded``: the
+    cases left out for want of a DEM regime (the title counts them). Saved with the cases' table."""
+    counts = regime_counts(data["regime"].to_numpy(), data["regime_pred"].to_numpy())
+    d, h = np.unique(plane["d_um"]), np.unique(plane["h_um"])
+    f, v_mm_s = float(plane["f"].iloc[0]), float(plane["v_mm_s"].iloc[0])
     shape = (len(d), len(h))  # d varies slowest
     fig = new_figure(14.5, 5.8)
     ax0, ax1 = fig.subplots(1, 2)
@@ -104,11 +140,8 @@ def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
                   f"(shade), probability contours", fontsize=10)
     agree = int(counts["both"].sum())
     fig.suptitle(f"Regimes: the surrogate's most probable regime matches the DEM at {agree} of {len(data)} "
-                 f"training cases; {int((~known).sum())} cases without a regime left out", fontsize=11)
+                 f"training cases; {int(excluded)} cases without a regime left out", fontsize=11)
     note = support_note(fig, plane["supported"].to_numpy(), support, "points of the (d, h) plane")
-    cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
-        "h_over_d", "mfr", "pd", "regime", "p_normal", "p_jamming", "p_short_feed", "regime_pred"]
-    table = data[[c for c in cols if c in data]].reset_index(drop=True)
-    paths = save_figure(fig, stem, table, floor)
-    return MapResult(paths, table, {"counts": counts, "excluded": int((~known).sum()), "agree": agree,
+    paths = save_figure(fig, stem, data, floor)
+    return MapResult(paths, data, {"counts": counts, "excluded": int(excluded), "agree": agree,
                                     "plane": plane, "note": note})

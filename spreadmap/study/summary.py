@@ -5,9 +5,10 @@ Reads (all optional): config.yaml (the floor the cases ran on, named under the t
 progress.csv, converge/stopped.json (or, while the loop runs, its last
 converge/steps/step_*.json), convergence/summary.json,
 surrogate/surrogate_metrics.csv, surrogate/surrogate_r2_vs_neurons.csv,
-maps/sensitivity_ranking_table.csv, surrogate/model.joblib (the trends), heldout/score.json and
-heldout/score.csv (the held-out check: tools/heldout.py score) and the cases tables (the
-regimes, the flagged cases).
+maps/sensitivity_ranking_table.csv, heldout/score.json and heldout/score.csv (the held-out
+check: tools/heldout.py score) and the cases tables (the regimes, the flagged cases). The trends
+are computed apart (``trends``, from surrogate/model.joblib) and handed to ``summary_markdown``,
+which writes no file.
 """
 from __future__ import annotations
 
@@ -21,7 +22,6 @@ from scipy.stats import qmc
 
 from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
-from spreadmap.files import write_text_atomically
 from spreadmap.loop.stepper import step_number
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
@@ -309,11 +309,14 @@ def _ranking(study: Path) -> list[str]:
     return lines
 
 
-def _trends(study: Path, ranges: dict | None) -> list[str]:
-    lines = ["## How the targets change with blade speed, h/d and friction (partial dependence, 95 % bands)"]
-    path = study / "surrogate" / "model.joblib"
+def trends(study: Path | str, ranges: dict | None = None) -> dict[str, pd.DataFrame]:
+    """The study's trends: the partial dependence (``main_effect``) of every target of its surrogate
+    (surrogate/model.joblib) on blade speed and friction (5 levels each over their ranges) and on
+    h/d (6 levels, geometric, over what the ranges allow), by variable; empty before the surrogate
+    exists. tools/publish_study.py writes each as trend_<variable>.csv."""
+    path = Path(study) / "surrogate" / "model.joblib"
     if not path.exists():
-        return lines + [NOT_YET]
+        return {}
     from spreadmap.surrogate.saved_model import load_model
 
     model = load_model(path)
@@ -322,10 +325,15 @@ def _trends(study: Path, ranges: dict | None) -> list[str]:
              "f": np.linspace(low[NAMES.index("f")], high[NAMES.index("f")], 5),
              "h_over_d": np.geomspace(low[NAMES.index("h_um")] / high[NAMES.index("d_um")],
                                       high[NAMES.index("h_um")] / low[NAMES.index("d_um")], 6)}
-    for variable, levels in grids.items():
-        effect = main_effect(model, ranges, variable, levels)
-        write_text_atomically(study / f"trend_{variable}.csv", effect.to_csv(index=False))
-        for target in model.targets:
+    return {variable: main_effect(model, ranges, variable, levels) for variable, levels in grids.items()}
+
+
+def _trends(effects: dict[str, pd.DataFrame]) -> list[str]:
+    lines = ["## How the targets change with blade speed, h/d and friction (partial dependence, 95 % bands)"]
+    if not effects:
+        return lines + [NOT_YET]
+    for variable, effect in effects.items():
+        for target in (c for c in effect.columns if f"{c}_low" in effect.columns):  # the model's targets, in order
             ends = effect.dropna(subset=[target]).iloc[[0, -1]]
             a, b = ends.to_dict("records")
             lines.append(f"- {target} vs {variable}: {a[target]:.3f} ({a[target + '_low']:.3f}-{a[target + '_high']:.3f}) "
@@ -390,10 +398,11 @@ def _flag_causes(marked: pd.DataFrame) -> str:
     return "; why: " + ", ".join(f"{named[c]} ({n})" for c, n in counts.items()) if len(counts) else ""
 
 
-def summary_markdown(study: Path | str, ranges: dict | None = None) -> str:
+def summary_markdown(study: Path | str, effects: dict[str, pd.DataFrame]) -> str:
+    """summary.md of the study folder's files, its trends section from ``effects`` (``trends``)."""
     study = Path(study)
     sections = [_cases(study), _convergence(study), _surrogate(study), _heldout(study), _ranking(study),
-                _trends(study, ranges), _regimes(study)]
+                _trends(effects), _regimes(study)]
     config = study / "config.yaml"
     floor = f"Floor: {floor_label(_read_yaml(config))}.\n\n" if config.exists() else ""
     return "# The study: what the data say\n\n" + floor + "\n\n".join("\n".join(s) for s in sections) + "\n"

@@ -4,7 +4,7 @@ Submodules, one job each: ``settings`` (config, no scikit-learn), ``training_row
 partitions, per-case noise), ``features`` (model inputs), ``noise`` (a new run's noise SD),
 ``models`` (GP and MLP ensemble), ``validation`` (repeated k-fold numbers), ``study`` (the reference
 study's protocol), ``fitting`` (all of it on a table), ``saved_model`` (file and loading),
-``prediction`` (points in, mean and SDs out), ``cli`` (scripts/predict.py), ``plots``.
+``prediction`` (points in, mean and SDs out), ``cli`` (tools/predict.py, scripts/predict.py), ``plots``.
 
 Importing this package imports no scikit-learn: config validation reads ``make_config`` from here.
 The other names below are loaded on first use.

@@ -1,4 +1,5 @@
-"""``scripts/predict.py``: the command line and the Snakemake entry around ``prediction.predict``."""
+"""The command line (``tools/predict.py``) and the Snakemake entry (``scripts/predict.py``) around
+``prediction.predict``."""
 from __future__ import annotations
 
 import argparse

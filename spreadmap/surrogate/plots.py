@@ -1,8 +1,9 @@
 """Figures of the surrogate's validation (PNG + PDF, the numbers behind each as CSV).
 
-* ``plot_parity``: out-of-fold predictions of the map model against the DEM values, one panel per
-  target, with 95 % prediction-interval bars and the validation numbers (RMSE and its interval
-  against the noise SD, coverage, R^2 against its ceiling) of both models.
+* ``plot_parity``: out-of-fold predictions of the map model (``validation.parity_table``) against
+  the DEM values, one panel per target, with 95 % prediction-interval bars and the validation
+  numbers (RMSE and its interval against the noise SD, coverage, R^2 against its ceiling) of both
+  models.
 * ``plot_study``: the study's protocol (held-out R^2 against neurons, min-max over the seeds)
   beside the cross-validated R^2 of the noise-aware models and the ceiling R^2_max.
 * ``plot_learning_curve``: cross-validated RMSE against the number of LDS cases, with the noise SD.
@@ -19,7 +20,6 @@ import pandas as pd
 from scipy.stats import norm
 
 from ..figures import new_figure, save_figure
-from ..files import write_text_atomically
 from . import validation
 
 COLOURS = {"gp": "tab:blue", "mlp": "tab:orange"}
@@ -34,15 +34,16 @@ def _numbers(v: pd.Series) -> str:
             f"R$^2$ {v['r2']:.2f} of max {v['r2_max']:.2f} (noise-corrected {v['r2_corrected']:.2f})")
 
 
-def plot_parity(val: pd.DataFrame, oof: pd.DataFrame, stem, floor: str | None = None) -> dict:
+def plot_parity(val: pd.DataFrame, parity: pd.DataFrame, stem, floor: str | None = None) -> dict:
+    """``val``: the validation metrics (surrogate_metrics.csv); ``parity``: ``validation.parity_table``
+    (or this figure's CSV read back), drawn and saved as the figure's CSV."""
     targets = list(dict.fromkeys(val["target"]))
     fig = new_figure(5.6 * len(targets), 6.0)
     axes = np.atleast_1d(fig.subplots(1, len(targets)))
-    tables = []
     for ax, t in zip(axes, targets):
         v = val[val["target"] == t]
         chosen = v[v["map_model"]].iloc[0]
-        case = validation.per_case(oof[(oof["target"] == t) & (oof["model"] == chosen["model"])])
+        case = parity[parity["target"] == t]
         z = norm.ppf(0.5 + chosen["level"] / 2)
         ax.errorbar(case["y"], case["mean"], yerr=z * case["run_sd"], fmt="o", ms=4, color=COLOURS[chosen["model"]],
                     ecolor="0.7", elinewidth=0.8, label=f"out-of-fold prediction ({chosen['model'].upper()}), "
@@ -66,8 +67,7 @@ def plot_parity(val: pd.DataFrame, oof: pd.DataFrame, stem, floor: str | None = 
                 bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
         ax.legend(loc="lower right", fontsize=7)
         ax.grid(alpha=0.3)
-        tables.append(case.assign(target=t, model=chosen["model"]))
-    return save_figure(fig, stem, pd.concat(tables, ignore_index=True), floor)
+    return save_figure(fig, stem, parity, floor)
 
 
 def plot_study(summary: pd.DataFrame, val: pd.DataFrame, stem, floor: str | None = None) -> dict:
@@ -122,14 +122,13 @@ def plot_learning_curve(learning: pd.DataFrame, stem, floor: str | None = None) 
 
 
 def plot_all(result, outdir, prefix: str = "surrogate", floor: str | None = None) -> dict:
-    """The three figures and the tables (validation metrics, study, out-of-fold) into outdir; with
+    """The three figures into outdir (the tables they draw from: the caller writes them); with
     ``floor`` (spreadmap.case.substrate.floor_label) the figures name the floor the cases ran on."""
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    write_text_atomically(outdir / f"{prefix}_metrics.csv", result.validation.to_csv(index=False))
-    write_text_atomically(outdir / f"{prefix}_study_runs.csv", result.study_runs.to_csv(index=False))
     return {
-        "parity": plot_parity(result.validation, result.oof, outdir / f"{prefix}_parity", floor),
+        "parity": plot_parity(result.validation, validation.parity_table(result.validation, result.oof),
+                              outdir / f"{prefix}_parity", floor),
         "r2_vs_neurons": plot_study(result.study_summary, result.validation, outdir / f"{prefix}_r2_vs_neurons", floor),
         "learning_curve": plot_learning_curve(result.learning, outdir / f"{prefix}_learning_curve", floor),
     }

@@ -113,6 +113,17 @@ def per_case(oof: pd.DataFrame) -> pd.DataFrame:
         model_sd=("model_sd", "mean"), run_sd=("run_sd", "mean")).reset_index()
 
 
+def parity_table(val: pd.DataFrame, oof: pd.DataFrame) -> pd.DataFrame:
+    """The numbers of the parity figure: per target (in ``val``'s order), the map model's
+    ``per_case`` table of its out-of-fold predictions, with ``target`` and ``model`` columns."""
+    tables = []
+    for t in dict.fromkeys(val["target"]):
+        chosen = val[(val["target"] == t) & val["map_model"]].iloc[0]
+        case = per_case(oof[(oof["target"] == t) & (oof["model"] == chosen["model"])])
+        tables.append(case.assign(target=t, model=chosen["model"]))
+    return pd.concat(tables, ignore_index=True)
+
+
 def by_band(oof: pd.DataFrame, h_over_d: pd.Series, edges=(0.0, 1.5, 2.0, 3.0, np.inf), level: float = 0.95) -> pd.DataFrame:
     """The out-of-fold predictions of one (model, target) against their intervals, by band of h/d
     (``h_over_d``: per case id; a band is [edge, next edge)). Per band: cases, the RMS error, the
