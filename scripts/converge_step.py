@@ -5,6 +5,7 @@ import json
 
 import pandas as pd
 
+from spreadmap.design import Design
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.loop.cost import PlannedCost
@@ -17,6 +18,7 @@ log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 p = sm.params
+design = Design.from_ranges(sm.params.ranges)  # the design space (config ranges), built once
 n = int(sm.wildcards.n)
 rows = []
 for path in sm.input.metrics:
@@ -27,7 +29,7 @@ table = case_noise(pd.DataFrame(rows), p.noise_model, p.noise_calibration, p.cou
 previous = None
 if "previous" in sm.input.keys():
     previous = read_json_object(sm.input.previous, "loop step record", ("n", "stop"))
-record = step(table, n, p.converge, previous, fit=make_map_fit(p.surrogate, final=True), ranges=p.ranges,
+record = step(table, n, p.converge, previous, fit=make_map_fit(p.surrogate, final=True), ranges=design,
               maps_cfg=p.maps, lds_seed=p.lds_seed, tolerance=p.tolerance, floors=p.floors,
               cost=PlannedCost.from_config(p.scene_config))
 record["noise_calibration"] = list(p.noise_calibration)

@@ -4,6 +4,7 @@ from pathlib import Path
 import pandas as pd
 
 from spreadmap import maps, sensitivity
+from spreadmap.design import Design
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.noise_law.apply import case_noise
@@ -15,6 +16,7 @@ log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 p = sm.params
+design = Design.from_ranges(sm.params.ranges)  # the design space (config ranges), built once
 cfg = map_config(p.maps)
 out = Path(sm.output.ranking).parent
 model = load_model(sm.input.model)
@@ -36,18 +38,18 @@ y_note = (None if chosen is None else f"{y} against MFR over the {int(chosen['n'
 machine = {k: v for k, v in cfg["machine"].items() if k != "y"}
 support = cfg["support"]
 floor = p.floor  # the floor the cases ran on, named on every map and in its CSV
-maps.machine_map(model, out / "machine_map", y=y, ranges=p.ranges, support=support, y_note=y_note, floor=floor,
+maps.machine_map(model, out / "machine_map", y=y, ranges=design, support=support, y_note=y_note, floor=floor,
                  **machine)
-maps.powder_band_map(model, out / "powder_band_map", y=y, ranges=p.ranges, support=support, floor=floor,
+maps.powder_band_map(model, out / "powder_band_map", y=y, ranges=design, support=support, floor=floor,
                      **cfg["powder"])
-maps.powder_cluster_map(model, out / "powder_cluster_map", y=y, ranges=p.ranges, support=support, floor=floor,
+maps.powder_cluster_map(model, out / "powder_cluster_map", y=y, ranges=design, support=support, floor=floor,
                         **cfg["powder"])
-maps.parallel_coordinates(cases, out / "parallel_coordinates", mfr_min=cfg["best_mfr_min"], ranges=p.ranges,
+maps.parallel_coordinates(cases, out / "parallel_coordinates", mfr_min=cfg["best_mfr_min"], ranges=design,
                           floor=floor)
-maps.regime_overlay(cases, model, out / "regime_overlay", p.regime, ranges=p.ranges, support=support, floor=floor,
+maps.regime_overlay(cases, model, out / "regime_overlay", p.regime, ranges=design, support=support, floor=floor,
                     **cfg["regime_plane"])
 ranking = sensitivity.sensitivity(model, list(model.targets), n=cfg["sobol_n"], draws=cfg["sobol_draws"],
-                                  ranges=p.ranges)
+                                  ranges=design)
 write_text_atomically(sm.output.ranking, ranking.assign(floor=floor).to_csv(index=False))
 sensitivity.plot_ranking(ranking, out / "sensitivity_ranking", floor)
 with pd.option_context("display.width", 250, "display.max_columns", None):

@@ -1,4 +1,5 @@
 """Snakemake entry: the DEM-free sampling-design study (LDS vs lattice vs random)."""
+from spreadmap.design import Design
 from spreadmap.experiments import sampling_study
 from spreadmap.experiments.plots import plot_sampling_study
 from spreadmap.files import write_text_atomically
@@ -9,8 +10,9 @@ log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
 p = sm.params
+design = Design.from_ranges(sm.params.ranges)  # the design space (config ranges), built once
 model = load_model(sm.input.model)
-result = sampling_study.study(predictor=model, ranges=p.ranges, seeds=p.study["seeds"],
+result = sampling_study.study(predictor=model, ranges=design, seeds=p.study["seeds"],
                               k_max=p.study["k_max"], tolerance=p.tolerance, floors=p.floors)
 write_text_atomically(sm.output.table, result.table.to_csv(index=False))
 write_text_atomically(sm.output.summary, result.summary.to_csv(index=False))

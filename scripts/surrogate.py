@@ -3,6 +3,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from spreadmap.design import Design
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.noise_law.apply import case_noise
@@ -14,10 +15,11 @@ from spreadmap.surrogate.plots import plot_all
 log_to(snakemake)  # noqa: F821
 
 sm = snakemake  # noqa: F821
+design = Design.from_ranges(sm.params.ranges)  # the design space (config ranges), built once
 # the cases' noise SDs: MFR's and PD's from the fitted law (config noise_model), the others scaled by
 # region (config noise_calibration); the table keeps the stated ones
 table = case_noise(read_table(sm.input.table), sm.params.noise_model, sm.params.noise_calibration, sm.params.counting_c)
-result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table, ranges=sm.params.ranges)
+result = fit_surrogate(table, sm.params.surrogate, source_path=sm.input.table, ranges=design)
 # the map model's numbers as `reference` would read them, where config fidelity_correction gives a
 # factor (the validation above and its figures stay against the cases' own preset)
 # (the rule passes it only where it applies to this run's preset and floor: rules/common.smk)

@@ -28,8 +28,10 @@ Where each concept is held (one module each):
   scene: ``case.scene``; its script: ``case.render``; its run: ``case.launcher``; its floor:
   ``case.substrate``
 * the published study: ``study`` (``cases``, ``summary``, ``restore``, ``checksums``)
-* design space, the unit cube: ``design`` (NAMES, PARAMETERS, TARGETS; to_unit / to_physical)
-* results table, usable cases: ``table`` (build_table; usable = finished and not flagged)
+* design space: ``design.Design``, built once from the config (``Design.from_config``): names,
+  ranges, to / from the unit cube, axes; h/d (``design.h_over_d``); every ``ranges`` argument takes it
+* results table, usable cases: ``table`` (build_table; ``usable`` = finished and not flagged,
+  ``usable_cases`` its rows); the noise SDs every analysis weighs cases by: ``noise_law.apply.case_noise``
 * partitions (the LDS prefix ``index < n``): ``surrogate.training_rows.partition``; the study
   rule's statistics per partition: ``study_rule.rule``
 * atomic writing: ``files`` (write_text_atomically, atomic_path); reading the workflow's files

@@ -1,9 +1,16 @@
 """The design space of a spreading study: four parameters, their ranges and units.
 
 Tables, samples and figures all use these column names, in this order.
+
+``Design`` is the one object that holds a study's design space: built once from the config
+(``Design.from_config``), it gives the names, the ranges, the maps to and from the unit cube,
+evenly spaced axes and the gap-to-diameter ratio h/d that the physics reads.  Every function of
+the package that takes a ``ranges`` argument takes a ``Design`` (or, as before, the config's
+``ranges`` mapping, or None for the defaults of ``PARAMETERS``); ``Design.of`` is that rule.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,55 +37,183 @@ BY_NAME: dict[str, Parameter] = {p.name: p for p in PARAMETERS}
 TARGETS: tuple[str, ...] = ("mfr", "pd")
 
 
-def bounds(ranges: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+@dataclass(frozen=True)
+class Design:
+    """A study's design space: the four parameters of ``PARAMETERS`` with the config's ranges.
+
+    Parameters
+    ----------
+    low, high : tuple of float
+        Lower and upper bounds in NAMES order, in each parameter's unit (f [-], d_um [um],
+        h_um [um], v_mm_s [mm/s]); ``low < high`` for each.
+
+    Raises
+    ------
+    ValueError
+        If a bound is not finite or a lower bound is not below its upper bound.
+    """
+
+    low: tuple[float, ...]
+    high: tuple[float, ...]
+
+    def __post_init__(self):
+        low, high = np.asarray(self.low, float), np.asarray(self.high, float)
+        if low.shape != (len(NAMES),) or high.shape != (len(NAMES),):
+            raise ValueError(f"a design has {len(NAMES)} bounds each ({', '.join(NAMES)})")
+        bad = [n for n, a, b in zip(NAMES, low, high, strict=True) if not (np.isfinite(a) and np.isfinite(b) and a < b)]
+        if bad:
+            raise ValueError(f"design range of {', '.join(bad)}: min must be finite and below max")
+        object.__setattr__(self, "low", tuple(float(x) for x in low))
+        object.__setattr__(self, "high", tuple(float(x) for x in high))
+
+    @classmethod
+    def from_ranges(cls, ranges: Mapping | None = None) -> Design:
+        """The design space of the config's ``ranges`` mapping.
+
+        Parameters
+        ----------
+        ranges : mapping or None, optional
+            ``{name: {"min": ..., "max": ...}}`` in each parameter's unit; a name or a bound it
+            leaves out keeps the default of ``PARAMETERS``. None: the defaults.
+
+        Returns
+        -------
+        Design
+            The design space.
+        """
+        ranges = ranges or {}
+        low = [ranges.get(n, {}).get("min", BY_NAME[n].low) for n in NAMES]
+        high = [ranges.get(n, {}).get("max", BY_NAME[n].high) for n in NAMES]
+        return cls(tuple(low), tuple(high))
+
+    @classmethod
+    def from_config(cls, config: Mapping | None) -> Design:
+        """The design space of a workflow config (its ``ranges`` section; None: the defaults).
+
+        Parameters
+        ----------
+        config : mapping or None
+            A workflow config (``spreadmap.config.load``).
+
+        Returns
+        -------
+        Design
+            The design space.
+        """
+        return cls.from_ranges((config or {}).get("ranges"))
+
+    @classmethod
+    def of(cls, design: Design | Mapping | None) -> Design:
+        """``design`` itself if it is a Design, else the Design of a ``ranges`` mapping (None: defaults).
+
+        Parameters
+        ----------
+        design : Design, mapping or None
+            A design space, or the config's ``ranges`` mapping, or None.
+
+        Returns
+        -------
+        Design
+            The design space.
+        """
+        return design if isinstance(design, Design) else cls.from_ranges(design)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The parameters' column names, in order (``NAMES``)."""
+        return NAMES
+
+    @property
+    def ranges(self) -> dict[str, dict[str, float]]:
+        """The design space as the config writes it: ``{name: {"min": ..., "max": ...}}``."""
+        return {n: {"min": a, "max": b} for n, a, b in zip(NAMES, self.low, self.high, strict=True)}
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper bounds as two float arrays of shape (4,), in NAMES order, physical units."""
+        return np.array(self.low, float), np.array(self.high, float)
+
+    def to_physical(self, unit_points: np.ndarray) -> np.ndarray:
+        """Points of the unit cube [0, 1]^4 (shape (n, 4) or (4,), NAMES order) in physical units."""
+        low, high = self.bounds()
+        return low + np.asarray(unit_points, float) * (high - low)
+
+    def to_unit(self, points: np.ndarray) -> np.ndarray:
+        """Points in physical units (shape (n, 4) or (4,), NAMES order) scaled to [0, 1] per parameter."""
+        low, high = self.bounds()
+        return (np.asarray(points, float) - low) / (high - low)
+
+    def axis(self, name: str, n: int) -> np.ndarray:
+        """``n`` evenly spaced values of parameter ``name`` over its range, both ends included."""
+        i = NAMES.index(name)
+        return np.linspace(self.low[i], self.high[i], n)
+
+    def label(self, name: str) -> str:
+        """The axis label of parameter ``name``, with its unit (for figures)."""
+        return BY_NAME[name].label
+
+
+def h_over_d(points) -> np.ndarray:
+    """The gap-to-diameter ratio h/d [-] of design points.
+
+    Parameters
+    ----------
+    points : pandas.DataFrame or mapping
+        Anything with ``h_um`` and ``d_um`` columns (or keys), both in um.
+
+    Returns
+    -------
+    numpy.ndarray
+        h_um / d_um, as floats.
+    """
+    return np.asarray(points["h_um"], float) / np.asarray(points["d_um"], float)
+
+
+def bounds(ranges: Design | Mapping | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper bounds in NAMES order; `ranges` (config) overrides the defaults.
 
     Parameters
     ----------
-    ranges : dict or None, optional
-        The config's ``ranges``: ``{name: {"min": ..., "max": ...}}`` in each parameter's unit
-        (f [-], d_um [um], h_um [um], v_mm_s [mm/s]); a name or a bound it leaves out keeps the
-        default of ``PARAMETERS``. None: the defaults.
+    ranges : Design, mapping or None, optional
+        The design space (``Design.of``): a Design, or the config's ``ranges``
+        ``{name: {"min": ..., "max": ...}}`` in each parameter's unit (f [-], d_um [um], h_um [um],
+        v_mm_s [mm/s]), where a name or a bound left out keeps the default of ``PARAMETERS``.
+        None: the defaults.
 
     Returns
     -------
     low, high : tuple of numpy.ndarray
         Two float arrays of shape (4,), in NAMES order, in physical units.
     """
-    ranges = ranges or {}
-    low = np.array([ranges.get(n, {}).get("min", BY_NAME[n].low) for n in NAMES], float)
-    high = np.array([ranges.get(n, {}).get("max", BY_NAME[n].high) for n in NAMES], float)
-    return low, high
+    return Design.of(ranges).bounds()
 
 
-def to_physical(unit_points: np.ndarray, ranges: dict | None = None) -> np.ndarray:
+def to_physical(unit_points: np.ndarray, ranges: Design | Mapping | None = None) -> np.ndarray:
     """Map points of the unit hypercube [0, 1]^4 to parameter values.
 
     Parameters
     ----------
     unit_points : numpy.ndarray
         Points in [0, 1]^4, shape (n, 4) (or (4,)), columns in NAMES order.
-    ranges : dict or None, optional
-        The config's ``ranges`` (see ``bounds``); None: the defaults.
+    ranges : Design, mapping or None, optional
+        The design space (see ``bounds``); None: the defaults.
 
     Returns
     -------
     numpy.ndarray
         The points in physical units (f [-], d_um [um], h_um [um], v_mm_s [mm/s]), same shape.
     """
-    low, high = bounds(ranges)
-    return low + np.asarray(unit_points, float) * (high - low)
+    return Design.of(ranges).to_physical(unit_points)
 
 
-def to_unit(points: np.ndarray, ranges: dict | None = None) -> np.ndarray:
+def to_unit(points: np.ndarray, ranges: Design | Mapping | None = None) -> np.ndarray:
     """Map parameter values to the unit hypercube (inverse of to_physical).
 
     Parameters
     ----------
     points : numpy.ndarray
         Points in physical units, shape (n, 4) (or (4,)), columns in NAMES order.
-    ranges : dict or None, optional
-        The config's ``ranges`` (see ``bounds``); None: the defaults.
+    ranges : Design, mapping or None, optional
+        The design space (see ``bounds``); None: the defaults.
 
     Returns
     -------
@@ -86,5 +221,4 @@ def to_unit(points: np.ndarray, ranges: dict | None = None) -> np.ndarray:
         The points scaled to [0, 1] per parameter (outside it for points outside the ranges),
         same shape.
     """
-    low, high = bounds(ranges)
-    return (np.asarray(points, float) - low) / (high - low)
+    return Design.of(ranges).to_unit(points)

@@ -53,6 +53,22 @@ def usable(table: pd.DataFrame) -> np.ndarray:
     return ok
 
 
+def usable_cases(table: pd.DataFrame) -> pd.DataFrame:
+    """The rows of a results table that ``usable`` keeps (finished, not flagged), in their order.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The results table (one row per case).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The usable rows, with `table`'s index and columns.
+    """
+    return table[usable(table)]
+
+
 def read_benchmark(path: Path | str) -> dict:
     """Wall time (s) and peak resident memory (MB) of the YADE run, from Snakemake's benchmark file."""
     try:

@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from ..case.scene import precision_target
-from ..design import NAMES
+from ..design import NAMES, Design
 from ..loop import map_criteria
 from ..loop.cost import PlannedCost
 from ..loop.model import make_map_fit
@@ -139,15 +139,16 @@ def replay_one(world: World, design: Mapping, seed: int, max_cases: int = 160,
     preset = design.get("preset", cfg["preset"])
     cost = world.cost(preset)
     fit = make_map_fit(cfg.get("surrogate"), final=True)
-    grids = map_criteria.map_grids(maps_cfg or cfg.get("maps"), cfg.get("ranges"))
+    space = Design.from_config(cfg)  # the design space, built once
+    grids = map_criteria.map_grids(maps_cfg or cfg.get("maps"), space)
     rng = np.random.default_rng([int(seed), 31])
     lds_seed = 1000 + int(seed)
     n = int(conv["start"])
-    table = world.run_cases(halton(n, lds_seed, cfg.get("ranges"))[list(NAMES)].to_numpy(float), preset, rng)
+    table = world.run_cases(halton(n, lds_seed, space)[list(NAMES)].to_numpy(float), preset, rng)
     prev, rows = None, []
     while True:
         models: dict = {}
-        rec = step(table, len(table), conv, prev, fit=fit, ranges=cfg.get("ranges"),
+        rec = step(table, len(table), conv, prev, fit=fit, ranges=space,
                    maps_cfg=maps_cfg or cfg.get("maps"), lds_seed=lds_seed, cost=cost, models_out=models)
         crit = rec["criteria"]["at_this_batch"]
         err = true_error(models, world, grids)

@@ -30,14 +30,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..design import h_over_d
+from ..table import usable_cases as usable
+
 TARGETS = ("mfr", "pd")
-
-
-def usable(table: pd.DataFrame) -> pd.DataFrame:
-    ok = table["status"].eq("ok")
-    if "flagged" in table:
-        ok &= ~table["flagged"].astype(bool)
-    return table[ok]
 
 
 def pairs(table: pd.DataFrame, preset: str, reference: str, targets=TARGETS) -> pd.DataFrame:
@@ -68,7 +64,7 @@ def pairs(table: pd.DataFrame, preset: str, reference: str, targets=TARGETS) -> 
     b = usable(table[table["preset"] == reference])[["name", "seed", "cpu_time"] + [c for t in targets for c in (t, f"{t}_sd")]]
     both = a.merge(b, on=["name", "seed"], suffixes=("_preset", "_ref"))
     out = both[["name", "seed", "f", "d_um", "h_um", "v_mm_s"]].copy()
-    out["h_over_d"] = out["h_um"] / out["d_um"]
+    out["h_over_d"] = h_over_d(out)
     out["cpu_preset"], out["cpu_ref"] = both["cpu_time_preset"], both["cpu_time_ref"]
     for t in targets:
         ref, pre = both[f"{t}_ref"], both[f"{t}_preset"]

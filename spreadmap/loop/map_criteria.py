@@ -66,7 +66,7 @@ from scipy import stats
 from sklearn.model_selection import KFold
 
 from ..config import checked
-from ..design import NAMES, bounds
+from ..design import NAMES, Design
 from ..study_rule.rule import DEFAULT_FLOORS, STATISTICS
 from .model import FitFunction, MapModel, table_data, usable_rows
 
@@ -134,18 +134,15 @@ def map_grids(maps_cfg: Mapping | None = None, ranges: dict | None = None, box_k
     """
     maps_cfg = checked("maps", maps_cfg)
     mach, powd = maps_cfg["machine"], maps_cfg["powder"]
-    low, high = bounds(ranges)
-    ix = {n: i for i, n in enumerate(NAMES)}
-
-    def axis(name, n):
-        return np.linspace(low[ix[name]], high[ix[name]], n)
+    design = Design.of(ranges)
+    axis = design.axis
 
     def grid(**cols):
         mesh = np.meshgrid(*[np.atleast_1d(np.asarray(cols[n], float)) for n in NAMES], indexing="ij")
         return np.column_stack([m.ravel() for m in mesh])
 
     centres = (np.arange(box_k) + 0.5) / box_k
-    box = grid(**{n: low[i] + centres * (high[i] - low[i]) for i, n in enumerate(NAMES)})
+    box = grid(**dict(zip(NAMES, design.to_physical(np.repeat(centres[:, None], len(NAMES), axis=1)).T, strict=True)))
     machine = grid(f=mach["f"], d_um=mach["d_um"], h_um=axis("h_um", int(mach["n_h"])),
                    v_mm_s=axis("v_mm_s", int(mach["n_v"])))
     powder = grid(f=axis("f", n_f), d_um=axis("d_um", n_d), h_um=powd["h_um"], v_mm_s=powd["v_mm_s"])

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..design import NAMES, bounds
+from ..design import NAMES, Design, h_over_d
 
 
 def ratio_quantile(m_a, s_a, m_b, s_b, q: float, lo: float = 1e-3, hi: float = 1e3, iterations: int = 80) -> np.ndarray:
@@ -67,9 +67,8 @@ def box_sample(n: int, seed: int = 0, ranges=None) -> pd.DataFrame:
     """n scrambled-Sobol' points over the design box (scipy.stats.qmc; n a power of 2)."""
     from scipy.stats import qmc
 
-    low, high = bounds(ranges)
     u = qmc.Sobol(len(NAMES), scramble=True, seed=seed).random(n)
-    return pd.DataFrame(qmc.scale(u, low, high), columns=list(NAMES))
+    return pd.DataFrame(Design.of(ranges).to_physical(u), columns=list(NAMES))
 
 
 def by_band(table: pd.DataFrame, target: str, edges=(1.0, 1.5, 2.0, 3.0, 5.0, 8.0)) -> pd.DataFrame:
@@ -97,7 +96,7 @@ def piles_by_band(cases: pd.DataFrame, min_heap_h2: float, edges=(1.0, 1.5, 2.0,
     rolled off the floor's ends (median, max, median share of the case's spheres); the heap at the
     window's end in h^2 (min, median); median MFR of the usable cases. Rows of every band, empty
     ones with zero cases."""
-    hd = cases["h_um"] / cases["d_um"]
+    hd = pd.Series(h_over_d(cases), index=cases.index)
     rows = []
     for lo, hi in zip(edges[:-1], edges[1:]):
         part = cases[(hd >= lo) & (hd < hi)]

@@ -13,7 +13,7 @@ import pandas as pd
 from scipy import stats
 
 from ..config import checked
-from ..design import NAMES, bounds
+from ..design import NAMES, Design
 from ..surrogate.settings import LAYER_TARGETS
 
 # config `maps:` at the schema's defaults (schemas/config.schema.yaml): the maps' keyword defaults, for
@@ -30,9 +30,7 @@ def values(given, n: int, name: str, ranges=None) -> np.ndarray:
         return np.sort(v)
     if n < 2:
         raise ValueError(f"grid size for {name} must be >= 2")
-    low, high = bounds(ranges)
-    i = NAMES.index(name)
-    return np.linspace(low[i], high[i], n)
+    return Design.of(ranges).axis(name, n)
 
 
 def grid_frame(**columns) -> pd.DataFrame:

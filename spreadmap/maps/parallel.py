@@ -13,7 +13,7 @@ import pandas as pd  # noqa: E402
 from matplotlib import colors as mcolors  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
-from ..design import BY_NAME, NAMES, bounds  # noqa: E402
+from ..design import BY_NAME, NAMES, Design  # noqa: E402
 from ..figures import save_figure  # noqa: E402
 from ..table import usable  # noqa: E402
 from .style import MapResult  # noqa: E402
@@ -71,8 +71,9 @@ def parallel_coordinates(
     if data.empty:
         raise ValueError("no usable case to draw")
     best = best_case(data, mfr_min=mfr_min, score=score)
-    low, high = bounds(ranges)
-    x = (data[list(NAMES)].to_numpy(float) - low) / (high - low)
+    design = Design.of(ranges)
+    low, high = design.bounds()
+    x = design.to_unit(data[list(NAMES)].to_numpy(float))
     for k, n in enumerate(NAMES):
         data[f"{n}_norm"] = x[:, k]
     for t in ("mfr", "pd"):
@@ -80,7 +81,7 @@ def parallel_coordinates(
         span = np.ptp(z)
         data[f"{t}_norm"] = (z - z.min()) / span if span > 0 else 0.5
     data["best"] = data.index == best.name
-    xb = (best[list(NAMES)].to_numpy(float) - low) / (high - low)
+    xb = design.to_unit(best[list(NAMES)].to_numpy(float))
 
     xpos = np.arange(len(NAMES), dtype=float)
     fig, axes = plt.subplots(2, 1, figsize=(12, 8.5), sharex=True)

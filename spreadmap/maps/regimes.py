@@ -19,7 +19,7 @@ import pandas as pd
 from matplotlib import colors as mcolors
 from matplotlib.lines import Line2D
 
-from ..design import BY_NAME, NAMES
+from ..design import BY_NAME, NAMES, h_over_d
 from ..figures import new_figure, save_figure
 from ..files import atomic_path
 from . import grids
@@ -81,7 +81,7 @@ def regime_tables(cases: pd.DataFrame, model, rules: dict, f: float = PLANE["f"]
     for c in ("p_normal", "p_jamming", "p_short_feed"):
         data[c] = at_cases[c].to_numpy()
     data["regime_pred"] = most_probable(at_cases)
-    data["h_over_d"] = data["h_um"] / data["d_um"]
+    data["h_over_d"] = h_over_d(data)
     d = grids.values(None, n_d, "d_um", ranges)
     h = grids.values(None, n_h, "h_um", ranges)
     plane = grids.regime_probabilities(

@@ -81,7 +81,10 @@ def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name
     cell's mean count as N for both (the deposit holds what passed), and needs no presets."""
     import pandas as pd
     from scipy import stats
-    ok = cases[(cases["status"] == "ok") & ~cases.get("flagged", pd.Series(False, index=cases.index)).fillna(False).astype(bool)]
+
+    from ..table import usable_cases
+
+    ok = usable_cases(cases)
     rows = []
     for key, cell in ok.groupby(list(group)):
         key = dict(zip(group, key if isinstance(key, tuple) else (key,)))

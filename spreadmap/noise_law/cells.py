@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..table import usable_cases as usable
+
 POINT = ("f", "d_um", "h_um", "v_mm_s")
 # the count behind each target's counting law (spreadmap.metrics.case)
 COUNT = {"mfr": "n_passed", "pd": "n_pd"}
@@ -27,11 +29,6 @@ def point_key(frame: pd.DataFrame) -> pd.Series:
     """A design point's label, the same for the same (f, d, h, v) in every table."""
     return (frame["f"].round(4).map("{:.4f}".format) + "/" + frame["d_um"].round(3).map("{:.3f}".format) + "/"
             + frame["h_um"].round(3).map("{:.3f}".format) + "/" + frame["v_mm_s"].round(4).map("{:.4f}".format))
-
-
-def usable(cases: pd.DataFrame) -> pd.DataFrame:
-    flagged = cases["flagged"].fillna(False).astype(bool) if "flagged" in cases else False
-    return cases[(cases["status"] == "ok") & ~flagged]
 
 
 def with_pd_count(cases: pd.DataFrame) -> pd.DataFrame:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..design import NAMES, bounds
+from ..design import NAMES, Design
 
 
 def band_widths(source, targets, n_sweep: int = 21, draws: int = 64, ranges=None, seed: int = 0):
@@ -17,12 +17,13 @@ def band_widths(source, targets, n_sweep: int = 21, draws: int = 64, ranges=None
     the draws); per_draw = {target: (draws, 4) widths}."""
     if n_sweep < 2:
         raise ValueError("n_sweep must be at least 2")
-    low, high = bounds(ranges)
+    design = Design.of(ranges)
+    low, high = design.bounds()
     centre = (low + high) / 2
     pts = []
     for i in range(len(NAMES)):
         p = np.repeat(centre[None, :], n_sweep, axis=0)
-        p[:, i] = np.linspace(low[i], high[i], n_sweep)
+        p[:, i] = design.axis(NAMES[i], n_sweep)
         pts.append(p)
     X = np.vstack(pts)
     F = source.draws(X, draws, seed=seed + 1, targets=list(targets))

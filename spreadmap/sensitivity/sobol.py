@@ -17,7 +17,7 @@ import pandas as pd
 from scipy import stats
 from scipy.stats import qmc
 
-from ..design import NAMES, bounds
+from ..design import NAMES, Design
 
 
 def _indices(fA, fB, fAB, n):
@@ -34,10 +34,10 @@ def sobol_draws(source, targets, n: int = 256, draws: int = 64, ranges=None, see
     """
     if n < 2 or n & (n - 1):
         raise ValueError(f"n must be a power of 2, got {n}")
-    low, high = bounds(ranges)
+    design = Design.of(ranges)
     d = len(NAMES)
     U = qmc.Sobol(2 * d, scramble=True, seed=seed).random(n)
-    A, B = low + U[:, :d] * (high - low), low + U[:, d:] * (high - low)
+    A, B = design.to_physical(U[:, :d]), design.to_physical(U[:, d:])
     AB = []
     for i in range(d):
         m = A.copy()

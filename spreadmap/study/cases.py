@@ -15,7 +15,7 @@ import pandas as pd
 
 from spreadmap.case.identity import case_id, is_legacy_id, readable_part
 from spreadmap.case.render import template_sha256
-from spreadmap.design import NAMES
+from spreadmap.design import NAMES, Design
 from spreadmap.sampling import halton, lattice
 from spreadmap.table import build_table
 
@@ -36,16 +36,16 @@ def planned_cases(config: dict, lds_points: int = 0, scene_sha256: str | None = 
     (a case shared by two lattices comes under each). Case ids are those of the scene template
     whose hash is scene_sha256 (default: the shipped template's)."""
     sweeps = config.get("sweeps") or {}
-    ranges, seed = config.get("ranges"), config["scene"]["seed"]
+    space, seed = Design.from_config(config), config["scene"]["seed"]
     sha = template_sha256() if scene_sha256 is None else scene_sha256
     if "lds" in sweeps:
         preset, size = sweeps["lds"].get("preset"), max(sweeps["lds"]["partitions"])
-        for row in halton(max(size, lds_points), sweeps["lds"]["seed"], ranges).to_dict("records"):
+        for row in halton(max(size, lds_points), sweeps["lds"]["seed"], space).to_dict("records"):
             yield PlannedCase("lds", row, preset, {"index": int(row["index"])},
                               case_id(row, preset or config["preset"], config, seed, sha), int(row["index"]) < size)
     if "lattice" in sweeps:
         preset = sweeps["lattice"].get("preset")
-        rows = [(k, row) for k in sorted(set(sweeps["lattice"]["k"])) for row in lattice(k, ranges).to_dict("records")]
+        rows = [(k, row) for k in sorted(set(sweeps["lattice"]["k"])) for row in lattice(k, space).to_dict("records")]
         for n, (k, row) in enumerate(rows):
             yield PlannedCase("lattice", row, preset, {"index": n, "k": k, "index_in_lattice": int(row["index"])},
                               case_id(row, preset or config["preset"], config, seed, sha), True)

@@ -22,6 +22,7 @@ from scipy.stats import qmc
 
 from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
+from spreadmap.design import h_over_d as gap_ratio
 from spreadmap.loop.stepper import step_number
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
@@ -235,7 +236,7 @@ def _intervals_by_band(study: Path, metrics: pd.DataFrame) -> list[str]:
     if parity is None or not tables or map_model.empty:
         return []
     cases = pd.concat([t[["case_id", "h_um", "d_um"]] for t in tables if {"case_id", "h_um", "d_um"} <= set(t.columns)])
-    h_over_d = (cases["h_um"] / cases["d_um"]).groupby(cases["case_id"]).first()
+    h_over_d = pd.Series(gap_ratio(cases), index=cases.index).groupby(cases["case_id"]).first()
     lines = []
     for target in ("mfr", "pd"):
         oof = parity[(parity["model"] == map_model.iloc[0]) & (parity["target"] == target)]
@@ -349,7 +350,7 @@ def _regimes(study: Path) -> list[str]:
         return lines + [NOT_YET]
     cases = pd.concat(tables, ignore_index=True).drop_duplicates("case_id")
     cases = cases[cases["status"] == "ok"]
-    cases = cases.assign(h_over_d=cases["h_um"] / cases["d_um"])
+    cases = cases.assign(h_over_d=gap_ratio(cases))
     for regime, group in cases.groupby("regime"):
         lines.append(f"- {regime}: {len(group)} of {len(cases)} cases; h/d {group['h_over_d'].min():.2f}-"
                      f"{group['h_over_d'].max():.2f}, v {group['v_mm_s'].min():.1f}-{group['v_mm_s'].max():.1f} mm/s")
