@@ -72,16 +72,11 @@ from .model import FitFunction, MapModel, table_data, usable_rows
 
 CRITERIA: tuple[str, ...] = ("map_error", "cv_rmse", "map_change", "ci")
 MIN_CASES = 5  # usable cases a target needs before its model is fitted and the criteria evaluated
-DEFAULTS: dict[str, Any] = {
-    "stop_on": ["map_error"],
-    "hold_for": 1,
-    "map_error": {"tolerance": {"mfr": 0.012, "pd": 0.012}, "margin": 1.0, "draws": 64},
-    "cv_rmse": {"factor": 1.2, "folds": 5},
-    "map_change": {"fraction": 0.2, "statistic": "rms", "box_k": 5},
-    "ci": {"level": 0.9, "resamples": 1000,
-           "halfwidth": {"mean": 0.05, "std": 0.10, "median": 0.07, "skewness": 0.30,
-                         "kurtosis": 0.60}},
-}
+# the criteria's defaults are the schema's (config ``converge:``); the CI criterion's half-widths
+# per statistic are the one default the schema leaves to the code
+DEFAULTS: dict[str, Any] = {k: v for k, v in checked("converge").items()
+                            if k in ("stop_on", "hold_for", *CRITERIA)}
+DEFAULTS["ci"]["halfwidth"] = {"mean": 0.05, "std": 0.10, "median": 0.07, "skewness": 0.30, "kurtosis": 0.60}
 
 
 def settings(cfg: Mapping | None) -> dict[str, Any]:
