@@ -10,13 +10,14 @@ import io
 import itertools
 import math
 import re
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
-from .design import NAMES, to_physical
+from .design import NAMES, Design, to_physical
 
 
 def halton_unit(n: int, seed: int) -> np.ndarray:
@@ -32,13 +33,13 @@ def lattice_unit(k: int) -> np.ndarray:
     return np.array(list(itertools.product(axis, repeat=len(NAMES))))
 
 
-def _table(unit: np.ndarray, ranges: dict | None) -> pd.DataFrame:
+def _table(unit: np.ndarray, ranges: Design | Mapping | None) -> pd.DataFrame:
     table = pd.DataFrame(to_physical(unit, ranges), columns=list(NAMES))
     table.insert(0, "index", np.arange(len(table)))
     return table
 
 
-def halton(n: int, seed: int, ranges: dict | None = None) -> pd.DataFrame:
+def halton(n: int, seed: int, ranges: Design | Mapping | None = None) -> pd.DataFrame:
     """LDS sample table: columns index, f, d_um, h_um, v_mm_s.
 
     The first `n` points of the seeded scrambled Halton sequence (``halton_unit``), so the table
@@ -50,8 +51,8 @@ def halton(n: int, seed: int, ranges: dict | None = None) -> pd.DataFrame:
         Number of points (rows).
     seed : int
         Seed of the scrambling (``scipy.stats.qmc.Halton``).
-    ranges : dict or None, optional
-        The config's ``ranges`` (``spreadmap.design.bounds``); None: the default ranges.
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
 
     Returns
     -------
@@ -62,15 +63,15 @@ def halton(n: int, seed: int, ranges: dict | None = None) -> pd.DataFrame:
     return _table(halton_unit(n, seed), ranges)
 
 
-def lattice(k: int, ranges: dict | None = None) -> pd.DataFrame:
+def lattice(k: int, ranges: Design | Mapping | None = None) -> pd.DataFrame:
     """Uniform lattice sample table with k points per dimension (k^4 rows).
 
     Parameters
     ----------
     k : int
         Points per dimension, end points included (k >= 2).
-    ranges : dict or None, optional
-        The config's ``ranges`` (``spreadmap.design.bounds``); None: the default ranges.
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
 
     Returns
     -------

@@ -35,12 +35,13 @@ another seed gives another candidate set and so another batch.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Callable, Sequence
 
 import numpy as np
 from scipy.stats import qmc
 
-from ..design import NAMES, to_physical, to_unit
+from ..design import NAMES, Design, to_physical, to_unit
 
 ACQUISITIONS = ("ivr", "ivr_per_cpu", "max_sd")
 
@@ -99,7 +100,7 @@ class _Posterior:
 
 def choose_batch(models: Sequence, n: int, seed: int, done: np.ndarray | None = None,
                  n_candidates: int = 4096, acquisition: str = "ivr",
-                 reference: np.ndarray | None = None, ranges: dict | None = None,
+                 reference: np.ndarray | None = None, ranges: Design | Mapping | None = None,
                  max_reference: int = 1024, pending: np.ndarray | None = None,
                  cost: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     """The next ``n`` design points (physical units, NAMES order) for the fitted ``models``.

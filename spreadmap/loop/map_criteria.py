@@ -118,7 +118,7 @@ def settings(cfg: Mapping | None) -> dict[str, Any]:
 # ----------------------------------------------------------------------------------------------
 # the map grids
 # ----------------------------------------------------------------------------------------------
-def map_grids(maps_cfg: Mapping | None = None, ranges: dict | None = None, box_k: int = 5,
+def map_grids(maps_cfg: Mapping | None = None, ranges: Design | Mapping | None = None, box_k: int = 5,
               n_d: int = 41, n_f: int = 5) -> dict[str, np.ndarray]:
     """Points (physical units, NAMES order) where the maps are read.
 

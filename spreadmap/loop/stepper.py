@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from ..case.identity import rounded
-from ..design import NAMES
+from ..design import NAMES, Design
 from ..sampling import halton
 from ..study_rule.rule import DEFAULT_TOLERANCE, batches_until_converged
 from ..table import usable
@@ -93,7 +93,7 @@ def _study_rule(table: pd.DataFrame, targets: Sequence[str], s: Mapping, n: int,
 
 
 def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | None = None,
-         fit: FitFunction | None = None, ranges: dict | None = None, maps_cfg: Mapping | None = None,
+         fit: FitFunction | None = None, ranges: Design | Mapping | None = None, maps_cfg: Mapping | None = None,
          lds_seed: int = 42, targets: Sequence[str] = ("mfr", "pd"),
          tolerance: float = DEFAULT_TOLERANCE, floors: Mapping | None = None,
          cost: Callable[[np.ndarray], np.ndarray] | None = None,
@@ -116,8 +116,8 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
     fit : FitFunction or None, optional
         The map model's fit function (``model.make_map_fit``); default: the surrogate's, default
         config.
-    ranges : dict or None, optional
-        The config's ``ranges`` (``design.bounds``) for the map grids, the LDS points and the
+    ranges : Design, mapping or None, optional
+        The design space (``design.Design``, or the config's ``ranges``) for the map grids, the LDS points and the
         candidates.
     maps_cfg : Mapping or None, optional
         The config's ``maps:`` section, for the grids the map change is measured on.

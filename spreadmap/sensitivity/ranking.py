@@ -63,8 +63,8 @@ def sensitivity(source, targets, n: int = 256, draws: int = 64, ranges=None, see
         Base sample size of the Sobol estimates (a power of 2).
     draws : int, optional
         Draws of the surrogate the intervals and ranks are taken over.
-    ranges : dict or None, optional
-        The config's ``ranges`` (``design.bounds``); None: the default ranges.
+    ranges : Design, mapping or None, optional
+        The design space (``design.Design``, or the config's ``ranges``); None: the default ranges.
     seed : int, optional
         Seed of the Sobol sample and the draws.
     n_sweep : int, optional

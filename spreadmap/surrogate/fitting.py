@@ -83,8 +83,8 @@ def fit_surrogate(df: pd.DataFrame, config=None, source_path=None, ranges=None, 
         The config's ``surrogate:`` section (schema defaults for what it leaves out).
     source_path : pathlib.Path or str or None, optional
         The table's file, recorded in the metadata with its SHA-256; None: not recorded.
-    ranges : dict or None, optional
-        The config's ``ranges`` (``design.bounds``): the model's design space.
+    ranges : Design, mapping or None, optional
+        The design space (``design.Design``, or the config's ``ranges``): the model's design space.
     log : callable, optional
         Called with one line of text per validation and final fit.
 

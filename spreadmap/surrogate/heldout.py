@@ -5,6 +5,7 @@ only when far enough from every case already run, so they test the surrogate bet
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
@@ -12,11 +13,11 @@ from scipy import stats
 from scipy.stats import qmc
 
 from ..case.identity import rounded
-from ..design import NAMES, to_physical, to_unit
+from ..design import NAMES, Design, to_physical, to_unit
 from ..table import usable
 
 
-def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float = 0.15,
+def choose_points(n: int, ranges: Design | Mapping, ran: pd.DataFrame, min_distance: float = 0.15,
                   seed: int = 2026, prefix: str = "heldout") -> pd.DataFrame:
     """n points of a scrambled Sobol' sequence in the design space, each at least min_distance
     (Euclidean, unit cube) from every point of `ran` (the cases of every sweep) and from the points
@@ -26,8 +27,8 @@ def choose_points(n: int, ranges: dict, ran: pd.DataFrame, min_distance: float =
     ----------
     n : int
         Number of points (>= 1).
-    ranges : dict
-        The config's ``ranges`` (``design.bounds``): the design space.
+    ranges : Design or mapping
+        The design space (``design.Design``, or the config's ``ranges``): the design space.
     ran : pandas.DataFrame
         The cases already run (the four parameters in physical units); may be empty.
     min_distance : float, optional
