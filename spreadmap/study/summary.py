@@ -24,6 +24,7 @@ from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
 from spreadmap.design import h_over_d as gap_ratio
 from spreadmap.loop.stepper import step_number
+from spreadmap.surrogate.training_rows import partition
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, usable
 
@@ -127,7 +128,8 @@ def _study_rule(study: Path) -> list[str]:
         indices = set(lds["index"].astype(int))
         complete = [n for n in sorted(partitions) if all(i in indices for i in range(n))]
         if len(complete) >= 2:
-            table = convergence_table(lds[lds["index"] < max(complete)], ("mfr", "pd"), complete, tolerance=tol, floors=floors)
+            table = convergence_table(partition(lds, max(complete), sweep=None), ("mfr", "pd"), complete,
+                                      tolerance=tol, floors=floors)
             steps = ", ".join(f"{int(r['partition'])}: {100 * r['max_change']:.1f} %" for r in table.to_dict("records")[1:])
             hit = first_converged(table)
             lines.append(f"- The study's rule (five statistics of MFR and PD within {100 * tol:g} % of the partition "
@@ -162,8 +164,8 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
         n = k ** len(NAMES)
         if (lattice["k"] == k).sum() != n or max(complete) < n:
             continue
-        ref = lds[lds["index"] < max(complete)]
-        of_lds = difference_from(ref, lds[lds["index"] < n], floors=floors).set_index(["target", "statistic"], drop=False)
+        ref = partition(lds, max(complete), sweep=None)
+        of_lds = difference_from(ref, partition(lds, n, sweep=None), floors=floors).set_index(["target", "statistic"], drop=False)
         of_lattice = (difference_from(ref, lattice[lattice["k"] == k], floors=floors)
                       .set_index(["target", "statistic"], drop=False))
         parts = []
