@@ -28,7 +28,7 @@ between three touching spheres: no sphere's cap lies over them, they reach down 
 floor under the substrate (z = -d) and no powder sphere enters them. D is the mean over the covered
 plane (the holes left out). ``mean_hollow_depth(jitter, hole_depth=1.0)`` gives the mean over the
 whole plane with the holes at the backstop's depth instead: (pi / (2 sqrt 3)) D + (1 - pi / (2 sqrt 3)),
-0.2443 d at jitter 0 and 0.3576 d at jitter 0.5 (tests/test_substrate.py checks both against a
+0.2443 d at jitter 0 and 0.3576 d at jitter 0.5 (tests/case/test_substrate.py checks both against a
 Monte Carlo integral over an explicitly built lattice).
 
 ``floor_label`` names the floor and its gap for every map, table and report.

@@ -15,8 +15,8 @@ points' log ratios l_i (their plain mean m and SD s, which holds their noise as 
     ln factor at a new point in  m +- t_{k-1, 0.975} s sqrt(1 + 1/k),
 
 stated to the maps as factor = exp(m) and SD = factor x t_{k-1, 0.975} s sqrt(1 + 1/k) / 1.96, so that
-their +-1.96 SD is this interval. On synthetic studies of known factor, spread and noise (tests/
-test_fidelity_correction.py) it held a fresh point's true factor 97-99.9 % of the time at 4-8 points:
+their +-1.96 SD is this interval. On synthetic studies of known factor, spread and noise
+(tests/fidelity/test_fidelity_correction.py) it held a fresh point's true factor 97-99.9 % of the time at 4-8 points:
 on the wide side, because s counts the points' own noise as spread. The random-effects interval
 sqrt(SE^2 + tau^2) held it only 82-84 % of the time (tau is often estimated 0 from a few points), and
 with Higgins' t_{k-2} 87-91 %: both too narrow. A weighted slope of l on ln(h/d) with its SE says

@@ -12,7 +12,7 @@ LABELS = {"mfr": "mass flow rate MFR [-]", "pd": "packing density PD [-]",
 SHORT = {"mfr": "MFR", "pd": "PD", "layer_packing": "layer fill", "coverage": "coverage",
          "roughness_d": "roughness/d", "thickness_ratio": "thickness/h"}
 # What a measure is, where its name alone can be misread (the column keeps its name, `layer_packing`):
-# drawn on any figure whose axis shows it. Numbers: tests/test_layer.py.
+# drawn on any figure whose axis shows it. Numbers: tests/metrics/test_layer.py.
 DEFINITIONS = {
     "layer_packing": ("layer fill = solid volume / volume between the floor (a rough floor's tops) and the layer's "
                       "upper surface;\nnot a bulk packing fraction: a monolayer reads 0.80, spheres sunk in a rough "

@@ -34,7 +34,7 @@ MIN_HEAP_H2 = section_schema("stability")["properties"]["min_heap_h2"]["default"
 # (the wedge, peak_overlap_wedged) is not a time-step matter and is not held to max_overlap_ratio,
 # but no wedge of a sound step goes this deep: the largest of ~1,400 published cases is 0.174 R
 # (docs/study/cases_converge.csv); a step too large goes further (0.92-0.95 x critical: 1.25-1.48 R, but the
-# whole bed blew up with it; no step was seen unstable near the blade alone: tests/test_stability_yade.py)
+# whole bed blew up with it; no step was seen unstable near the blade alone: tests/case/test_stability_yade.py)
 MAX_WEDGE_OVERLAP = section_schema("stability")["properties"]["max_wedge_overlap_ratio"]["default"]
 # stability.max_flow_decline_z's default (the schema's): a flow that fell by more counting-noise SEs ran down
 MAX_FLOW_DECLINE_Z = section_schema("stability")["properties"]["max_flow_decline_z"]["default"]

@@ -33,7 +33,7 @@ Quantities (the mean runs over the floor area of the region, bare floor included
 s is evaluated at the centres of a regular grid of cells (spacing `spacing`), so the integrals
 are midpoint sums; their error comes from the circle rims: at a spacing of d/100 about 1e-3
 relative in the worst case (a lattice in step with the grid, every rim cut the same way), less
-for a random deposit (tests/test_layer.py).
+for a random deposit (tests/metrics/test_layer.py).
 
 Their noise (what another packing seed would change)
 -----------------------------------------------------
@@ -44,7 +44,7 @@ volume) and the measure's standard error is the delete-one-block jackknife's (Ef
 (B - 1) / B sum (theta_-j - theta_.)^2), which carries the ratio measures (packing) and the SD
 (roughness) as well as the plain means. Neighbouring blocks share the spheres on their common
 edge, so short blocks understate the error: on independent random deposits of known spread
-(tests/test_layer.py) blocks of 1 d give 0.82-0.89 of it, blocks of 2 d 0.93-0.96 (the default,
+(tests/metrics/test_layer.py) blocks of 1 d give 0.82-0.89 of it, blocks of 2 d 0.93-0.96 (the default,
 metrics.layer_block_d). Against the SD over packing seeds of the same DEM design point
 (docs/precision's 8 points x 4 seeds, 24 degrees of freedom per measure) blocks of 2 d give
 0.72-1.25 of it (thickness lowest: part of its seed noise is the whole flow's, which one layer's

@@ -1,5 +1,5 @@
 """MFR, PD, the case's noise estimate, the regime and case_metrics on synthetic data with known
-answers (no YADE). Layer quality itself: tests/test_layer.py."""
+answers (no YADE). Layer quality itself: tests/metrics/test_layer.py."""
 import math
 
 import numpy as np
@@ -275,7 +275,7 @@ def raw_record(status="ok", overlap=0.001, escaped=0, layers=1, row_only=False):
 
 def test_case_metrics_of_a_clean_two_layer_case():
     """Two simple cubic layers: MFR = PD = pi/6 (gap 2 d); 10 columns of 8 spheres passed; the
-    measured layer (10 d to 19 d) has the hand values of tests/test_layer.py: coverage pi/4,
+    measured layer (10 d to 19 d) has the hand values of tests/metrics/test_layer.py: coverage pi/4,
     packing 8/11, mean thickness 11 pi d / 24 over a gap of 2 d."""
     m = case_metrics(raw_record(layers=2), RULES, BOUNDS, SETTINGS)
     assert m["mfr"] == pytest.approx(math.pi / 6) and m["pd"] == pytest.approx(math.pi / 6)

@@ -7,7 +7,6 @@ import pickle
 import subprocess
 import sys
 import warnings
-from pathlib import Path
 from types import SimpleNamespace
 
 import jinja2
@@ -16,6 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import synthetic_cases as syn
+from conftest import ROOT
 from sklearn.model_selection import train_test_split
 
 from spreadmap.design import NAMES
@@ -23,7 +23,6 @@ from spreadmap.surrogate import fitting, models, prediction, saved_model, settin
 from spreadmap.surrogate.cli import cli_main
 from spreadmap.surrogate.training_rows import select
 
-ROOT = Path(__file__).resolve().parents[1]
 TOOL = ROOT / "tools" / "predict.py"
 SCRIPT = ROOT / "scripts" / "predict.py"  # the rule predict's entry
 PYTHON = str(ROOT / ".venv" / "bin" / "python") if (ROOT / ".venv" / "bin" / "python").exists() else sys.executable

@@ -86,7 +86,7 @@ def test_a_number_yaml_reads_as_a_string_is_explained(raw_config, text, written)
 ])
 def test_a_negative_packing_seed_is_refused(raw_config, change, key):
     """YADE's makeCloud seeds from the clock for a negative seed (not reproducible); 0 and up are
-    reproducible in this build (tests/test_packing_seed_yade.py)."""
+    reproducible in this build (tests/case/test_packing_seed_yade.py)."""
     change(raw_config)
     with pytest.raises(ConfigError, match=key + r"': value -\d is not allowed; it must be >= 0"):
         validate(copy.deepcopy(raw_config))

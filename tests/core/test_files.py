@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import ROOT
 
 from spreadmap.case.launcher import write_json_atomically
 from spreadmap.case.vtk_export import write_vtk
@@ -127,7 +128,7 @@ def test_outputs_are_written_only_through_the_atomic_helpers():
     """No output of the package or of a Snakemake script is written in place (a run killed
     half-way would leave a truncated CSV, JSON or figure that looks finished); writes inside an
     atomic_path (to its `tmp`) are the helper's own."""
-    root = Path(__file__).resolve().parent.parent
+    root = ROOT
     found = []
     for path in sorted([*root.glob("spreadmap/**/*.py"), *root.glob("scripts/*.py")]):
         name = str(path.relative_to(root))

@@ -5,6 +5,7 @@ import re
 
 import pandas as pd
 import pytest
+from conftest import ROOT
 
 from spreadmap.case.identity import case_scene
 from spreadmap.case.launcher import failure_reason, failure_record, retry_wanted
@@ -95,14 +96,13 @@ def test_a_killed_launcher_takes_its_yade_run_with_it(tmp_path):
     import subprocess
     import sys
     import time
-    from pathlib import Path
 
     fake = tmp_path / "yade"
     fake.write_text("#!/bin/sh\necho \"stand-in yade pid $$\"\nexec sleep 60\n")
     fake.chmod(0o755)
     code = ("import sys; from spreadmap.case.launcher import run_case; "
             "run_case(sys.argv[1], sys.argv[2], sys.argv[3], 60)")
-    env = {**os.environ, "SPREADMAP_YADE": str(fake), "PYTHONPATH": str(Path(__file__).resolve().parent.parent)}
+    env = {**os.environ, "SPREADMAP_YADE": str(fake), "PYTHONPATH": str(ROOT)}
     log = tmp_path / "run.log"
     launcher = subprocess.Popen([sys.executable, "-c", code, str(tmp_path / "case.py"), str(tmp_path / "raw.json"), str(log)],
                                 env=env, stdin=subprocess.DEVNULL, start_new_session=True)

@@ -1,7 +1,7 @@
 """tools/reattribute_wedges.py's own parts (no YADE): which flags it re-reads and what counts as the
 same simulation. Its re-runs are checked on the study's cases (docs/study/README.md); the rule
 itself, and that a raw record carries the parameters the tool re-renders from, by
-tests/test_stability_yade.py."""
+tests/case/test_stability_yade.py."""
 import importlib.util
 import json
 

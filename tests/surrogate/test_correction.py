@@ -3,16 +3,15 @@ moments against Monte Carlo draws, the saved model's predictions and draws, the 
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import numpy as np
 import pytest
 import synthetic_cases as syn
+from conftest import ROOT
 
 from spreadmap.surrogate import fitting, saved_model
 from spreadmap.surrogate.correction import Correction, uncorrected_label
 
-ROOT = Path(__file__).resolve().parents[1]
 QUICK = {"cv_repeats": 1, "cv_folds": 3, "gp_restarts": 0, "learning_curve": False, "mlp_sizes": [4], "mlp_alphas": [1.0],
          "ensemble_members": 4, "neurons": [2], "seeds": [0]}
 SECTION = {"preset": "default", "reference": "reference",
