@@ -258,6 +258,8 @@ def load(path: Path | str) -> dict:
     ------
     OSError
         If the file cannot be read.
+    yaml.YAMLError
+        If the file is not YAML.
     ConfigError
         If the config is not valid (``validate``).
     """
