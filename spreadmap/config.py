@@ -15,7 +15,10 @@ SCHEMA = Path(__file__).resolve().parent.parent / "schemas" / "config.schema.yam
 
 
 class ConfigError(ValueError):
-    """A bad configuration value: the message says which key, what value, what is allowed."""
+    """A bad configuration value: the message says which key, what value, what is allowed.
+
+    A ValueError raised by ``validate`` and ``load``, its message one line.
+    """
 
 
 def _key_path(path) -> str:
@@ -77,8 +80,30 @@ def _yaml_float(value) -> str | None:
 
 
 def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
-    """Validate `config` in place with Snakemake's validator (defaults filled), then the
-    cross-key rules. Returns the config. Raises ConfigError with a one-line message."""
+    """Validate `config` in place with Snakemake's validator (defaults filled), then the cross-key rules.
+
+    The schema (schemas/config.schema.yaml) fills every default it has; the cross-key rules are the
+    checks a schema cannot express (the presets named exist, ranges with min below max, noise
+    calibration regions that are not empty, the noise model's sections, the pictures' points, the
+    surrogate, decisions and fidelity sections, the PD box against the blade).
+
+    Parameters
+    ----------
+    config : dict
+        The configuration as read from YAML; changed in place (defaults filled).
+    schema_path : pathlib.Path or str, optional
+        The JSON schema (YAML); default: schemas/config.schema.yaml (``SCHEMA``).
+
+    Returns
+    -------
+    dict
+        The same config, validated and with its defaults filled.
+
+    Raises
+    ------
+    ConfigError
+        With a one-line message naming the key, the bad value and what is allowed.
+    """
     from snakemake.exceptions import WorkflowError
     from snakemake.utils import validate as snakemake_validate
 
@@ -151,7 +176,23 @@ def _check_cross_keys(config: dict) -> None:
 
 @lru_cache(maxsize=None)
 def section_schema(name: str) -> dict:
-    """The JSON schema of one top-level config section (read once; do not modify it)."""
+    """The JSON schema of one top-level config section (read once; do not modify it).
+
+    Parameters
+    ----------
+    name : str
+        The section (a top-level key of schemas/config.schema.yaml, e.g. "maps").
+
+    Returns
+    -------
+    dict
+        The section's schema, the same object at every call (cached).
+
+    Raises
+    ------
+    KeyError
+        If the schema has no such section.
+    """
     return yaml.safe_load(SCHEMA.read_text())["properties"][name]
 
 
@@ -165,10 +206,29 @@ def _fill_defaults(schema: dict, value: dict) -> dict:
 
 
 def checked(name: str, section: Mapping | None = None) -> dict:
-    """One config section validated against its schema with the schema's defaults filled (a copy;
-    {} or None: the defaults alone), for code that is handed a section, or none, rather than a
-    loaded config. ValueError names the key. (Sections that $ref the schema's definitions, e.g.
-    noise_model, cannot be checked alone.)"""
+    """One config section validated against its schema with the schema's defaults filled (a copy).
+
+    For code that is handed a section, or none, rather than a loaded config. (Sections that $ref the
+    schema's definitions, e.g. noise_model, cannot be checked alone.)
+
+    Parameters
+    ----------
+    name : str
+        The section (a top-level key of the schema).
+    section : Mapping or None, optional
+        The section's values; {} or None: the defaults alone. Not modified.
+
+    Returns
+    -------
+    dict
+        A copy of the section with the schema's defaults filled (in nested objects too).
+
+    Raises
+    ------
+    ValueError
+        If the section does not match its schema; the message names the key (or the unknown keys
+        and the known ones).
+    """
     schema = section_schema(name)
     value = copy.deepcopy(dict(section or {}))
     error = jsonschema.exceptions.best_match(jsonschema.Draft202012Validator(schema).iter_errors(value))
@@ -182,7 +242,27 @@ def checked(name: str, section: Mapping | None = None) -> dict:
 
 
 def load(path: Path | str) -> dict:
-    """Read a YAML config file and validate it."""
+    """Read a YAML config file and validate it.
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The config file (e.g. config.yaml); an empty file is an empty config.
+
+    Returns
+    -------
+    dict
+        The validated config with the schema's defaults filled (``validate``).
+
+    Raises
+    ------
+    OSError
+        If the file cannot be read.
+    yaml.YAMLError
+        If the file is not YAML.
+    ConfigError
+        If the config is not valid (``validate``).
+    """
     with open(path) as fh:
         config = yaml.safe_load(fh) or {}
     return validate(copy.deepcopy(config))

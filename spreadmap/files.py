@@ -27,10 +27,28 @@ DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
 @contextmanager
 def atomic_path(path: Path | str):
-    """Yield a temporary path beside `path` to write to; on success it is flushed to disk and
-    replaces `path` in one rename (then the folder is flushed). On an error it is removed and
-    `path` is left as it was; a full disk (ENOSPC, EDQUOT) or a file-size limit (EFBIG) is raised
-    as an OSError of the same errno whose message names `path` and says so."""
+    """Yield a temporary path beside `path` to write to; on success it replaces `path` in one rename.
+
+    On success the temporary file is flushed to disk and replaces `path` in one rename (then the
+    folder is flushed). On an error it is removed and `path` is left as it was. The temporary name
+    is a dot file unique to the process and call, so that globs of the folder do not see it.
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The file to write; its folder is created if missing.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary path to write the whole file to.
+
+    Raises
+    ------
+    OSError
+        A full disk (ENOSPC, EDQUOT) or a file-size limit (EFBIG) is raised as an OSError of the
+        same errno whose message names `path` and says so; any other error as it is.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     # unique per process and call (two threads of one process never share it); a dot file, so
@@ -55,6 +73,23 @@ def atomic_path(path: Path | str):
 
 
 def write_text_atomically(path: Path | str, text: str, encoding: str = "utf-8") -> None:
+    """Write text to a file atomically and durably (``atomic_path``).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The file; its folder is created if missing.
+    text : str
+        The whole content, written as it is (no newline translation).
+    encoding : str, optional
+        The text encoding.
+
+    Raises
+    ------
+    OSError
+        If the write fails (``atomic_path``: a full disk or a file-size limit named as such); the
+        file is left as it was.
+    """
     with atomic_path(path) as tmp:
         with open(tmp, "w", encoding=encoding, newline="\n") as fh:
             fh.write(text)

@@ -28,24 +28,83 @@ KEY_DIGITS = 12
 
 
 def rounded(point: dict) -> dict:
-    """The design point as simulated: each parameter rounded to DECIMALS."""
+    """The design point as simulated: each parameter rounded to DECIMALS.
+
+    Parameters
+    ----------
+    point : dict
+        The design point: ``f`` [-], ``d_um`` [um], ``h_um`` [um], ``v_mm_s`` [mm/s] (other keys
+        are ignored).
+
+    Returns
+    -------
+    dict
+        ``{"f", "d_um", "h_um", "v_mm_s"}`` as floats, rounded to ``DECIMALS`` (4, 3, 3 and 4
+        decimals).
+
+    Raises
+    ------
+    KeyError
+        If the point lacks one of the four parameters.
+    """
     return {k: round(float(point[k]), n) for k, n in DECIMALS.items()}
 
 
 def readable_id(point: dict, preset: str, seed: int) -> str:
     """The readable part of a case id: preset, design point (rounded as simulated) and packing seed.
-    Alone, it was the case id before content keys (issue 35)."""
+
+    Alone, it was the case id before content keys (issue 35).
+
+    Parameters
+    ----------
+    point : dict
+        The design point: ``f`` [-], ``d_um`` [um], ``h_um`` [um], ``v_mm_s`` [mm/s]; rounded as
+        simulated (``rounded``).
+    preset : str
+        The fidelity preset's name.
+    seed : int
+        The packing seed.
+
+    Returns
+    -------
+    str
+        ``<preset>-f<f>-d<d>-h<h>-v<v>-s<seed>``, f and v with 4 decimals, d and h with 3
+        (``READABLE_PATTERN``).
+    """
     p = rounded(point)
     return f"{preset}-f{p['f']:.4f}-d{p['d_um']:.3f}-h{p['h_um']:.3f}-v{p['v_mm_s']:.4f}-s{int(seed)}"
 
 
 def readable_part(cid: str) -> str:
-    """The readable part of a case id (a legacy id is all readable part)."""
+    """The readable part of a case id (a legacy id is all readable part).
+
+    Parameters
+    ----------
+    cid : str
+        A case id: a content id (``CASE_ID_PATTERN``) or a legacy one.
+
+    Returns
+    -------
+    str
+        The id without its trailing ``-<key>`` (``KEY_HEX`` hex digits) when it is a content id;
+        anything else unchanged.
+    """
     return re.sub(rf"-[0-9a-f]{{{KEY_HEX}}}$", "", cid) if re.fullmatch(CASE_ID_PATTERN, cid) else cid
 
 
 def is_legacy_id(cid: str) -> bool:
-    """Whether a case id is of the form before content keys (issue 35)."""
+    """Whether a case id is of the form before content keys (issue 35).
+
+    Parameters
+    ----------
+    cid : str
+        A case id (anything else is read as its ``str``).
+
+    Returns
+    -------
+    bool
+        True when the whole id matches ``LEGACY_CASE_ID_PATTERN`` (the readable part, no key).
+    """
     return re.fullmatch(LEGACY_CASE_ID_PATTERN, str(cid)) is not None
 
 
@@ -70,33 +129,119 @@ def _canonical(value):
 
 
 def content_key(params: dict) -> str:
-    """The key of a case's content: the first KEY_HEX hex digits of the SHA-256 of its parameters
-    (what the YADE script receives, scene_sha256 included) without the fields that only name it,
-    as canonical JSON (sorted keys, floats at KEY_DIGITS significant digits)."""
+    """The key of a case's content: the first KEY_HEX hex digits of the SHA-256 of its parameters.
+
+    The parameters are what the YADE script receives (scene_sha256 included) without the fields that
+    only name it (``NAMING_FIELDS``), as canonical JSON (sorted keys, floats at KEY_DIGITS significant
+    digits; an int and a float of one value give one key).
+
+    Parameters
+    ----------
+    params : dict
+        The case's parameters (``case_scene``; ``case_id`` may be there or not).
+
+    Returns
+    -------
+    str
+        ``KEY_HEX`` (8) lowercase hex digits.
+
+    Raises
+    ------
+    TypeError
+        If a parameter value cannot enter a key (not a number, bool, str, None, dict, list, tuple
+        or numpy scalar).
+    """
     content = {k: v for k, v in params.items() if k not in NAMING_FIELDS}
     text = json.dumps(_canonical(content), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:KEY_HEX]
 
 
 def keyed_id(params: dict) -> str:
-    """The case id of a case's parameters: the readable part from its point, preset and seed, then
-    its content key."""
+    """The case id of a case's parameters: the readable part from its point, preset and seed, then its content key.
+
+    Parameters
+    ----------
+    params : dict
+        The case's parameters (``case_scene``): ``point`` (f [-], d_um [um], h_um [um],
+        v_mm_s [mm/s]), ``preset`` and ``seed`` name it; all of them but the naming fields key it.
+
+    Returns
+    -------
+    str
+        ``<readable part>-<content key>`` (``CASE_ID_PATTERN``).
+
+    Raises
+    ------
+    KeyError
+        If the parameters lack ``point``, ``preset`` or ``seed``.
+    TypeError
+        If a parameter cannot enter the key (``content_key``).
+    """
     return f"{readable_id(params['point'], params['preset'], params['seed'])}-{content_key(params)}"
 
 
 def repeat_group(params: dict) -> str:
-    """What the seed repeats of a case share: its readable id without the seed, then the content
-    key of its parameters with the seed left out (two materials' repeats at one point are two groups)."""
+    """What the seed repeats of a case share: its readable id without the seed, then a content key without the seed.
+
+    The key is that of its parameters with the seed left out, so two materials' repeats at one point
+    are two groups.
+
+    Parameters
+    ----------
+    params : dict
+        The case's parameters (``case_scene``): ``point``, ``preset`` and ``seed`` at least.
+
+    Returns
+    -------
+    str
+        ``<preset>-f<f>-d<d>-h<h>-v<v>-<key of the parameters with seed None>``.
+
+    Raises
+    ------
+    KeyError
+        If the parameters lack ``point``, ``preset`` or ``seed``.
+    TypeError
+        If a parameter cannot enter the key (``content_key``).
+    """
     readable = re.sub(r"-s\d+$", "", readable_id(params["point"], params["preset"], params["seed"]))
     return f"{readable}-{content_key({**params, 'seed': None})}"
 
 
 def case_scene(point: dict, preset: str, config: dict, seed: int | None = None,
                scene_sha256: str | None = None) -> tuple[str, dict]:
-    """(case id, the parameters of the YADE scene script) of a design point at a preset and packing
-    seed (default: the scene's) under a configuration; scene_sha256 is the template's hash
-    (default: spreadmap.case.render.template_sha256() of the shipped template). Raises
-    spreadmap.case.scene.UnsafeTimeStep or ValueError for a case that must not run."""
+    """(case id, the parameters of the YADE scene script) of a design point at a preset and packing seed under a config.
+
+    The point is rounded as simulated (``rounded``); the parameters are
+    ``spreadmap.case.scene.scene_parameters``' with ``scene_sha256`` and then ``case_id`` added.
+
+    Parameters
+    ----------
+    point : dict
+        The design point: ``f`` [-], ``d_um`` [um], ``h_um`` [um], ``v_mm_s`` [mm/s].
+    preset : str
+        The preset's name (a key of the config's ``presets``).
+    config : dict
+        The loaded configuration (``spreadmap.config.load``): presets, material, scene, metrics.
+    seed : int or None, optional
+        The packing seed; None: the scene's (config ``scene.seed``).
+    scene_sha256 : str or None, optional
+        The hash of the scene template; None: ``spreadmap.case.render.template_sha256()`` of the
+        shipped template.
+
+    Returns
+    -------
+    case_id : str
+        The case id, ``<readable part>-<content key>``.
+    params : dict
+        The parameters of the YADE scene script (SI units), with ``scene_sha256`` and ``case_id``.
+
+    Raises
+    ------
+    spreadmap.case.scene.UnsafeTimeStep
+        For a case that must not run: the preset forces a time step above its critical step.
+    ValueError
+        For a case that must not run: a parameter of the point is not a positive number.
+    """
     from .render import template_sha256
     from .scene import scene_parameters
 
@@ -109,5 +254,31 @@ def case_scene(point: dict, preset: str, config: dict, seed: int | None = None,
 
 
 def case_id(point: dict, preset: str, config: dict, seed: int | None = None, scene_sha256: str | None = None) -> str:
-    """The case id of a design point at a preset and packing seed under a configuration (case_scene)."""
+    """The case id of a design point at a preset and packing seed under a configuration (case_scene).
+
+    Parameters
+    ----------
+    point : dict
+        The design point: ``f`` [-], ``d_um`` [um], ``h_um`` [um], ``v_mm_s`` [mm/s].
+    preset : str
+        The preset's name (a key of the config's ``presets``).
+    config : dict
+        The loaded configuration (``spreadmap.config.load``).
+    seed : int or None, optional
+        The packing seed; None: the scene's (config ``scene.seed``).
+    scene_sha256 : str or None, optional
+        The hash of the scene template; None: that of the shipped template.
+
+    Returns
+    -------
+    str
+        The case id, ``<readable part>-<content key>``.
+
+    Raises
+    ------
+    spreadmap.case.scene.UnsafeTimeStep
+        For a case that must not run (``case_scene``).
+    ValueError
+        For a case that must not run (``case_scene``).
+    """
     return case_scene(point, preset, config, seed, scene_sha256)[0]

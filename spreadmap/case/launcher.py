@@ -56,8 +56,40 @@ def clean_environment() -> dict:
 
 
 def run_case(script: Path | str, raw_out: Path | str, log_path: Path | str, timeout_s: float) -> dict:
-    """Run one case; returns {"exit_code", "outcome", "wall_time", "reason"}. The raw result (written
-    by the YADE script itself, atomically) exists after outcomes "ok" and "blown"."""
+    """Run one case with Debian's YADE; returns the launcher result.
+
+    YADE runs as ``yade -n -j1 -x <script> <raw_out>`` in raw_out's folder, with the venv kept out of
+    its environment, in a session of its own and under ``setpriv --pdeathsig KILL`` where setpriv
+    exists (see the module docstring). At the timeout the whole process group is killed. The raw
+    result (written by the YADE script itself, atomically) exists after outcomes "ok" and "blown";
+    an exit code that says "ok" or "blown" without it is a crash.
+
+    Parameters
+    ----------
+    script : pathlib.Path or str
+        The rendered case script (``spreadmap.case.render.render``).
+    raw_out : pathlib.Path or str
+        Where the YADE script writes its raw result; its folder is created and YADE runs in it.
+    log_path : pathlib.Path or str
+        The case's log (its folder created, the file overwritten): the command line, then YADE's
+        output, then the launcher's line on a timeout.
+    timeout_s : float
+        The outer wall-time limit [s].
+
+    Returns
+    -------
+    dict
+        ``exit_code`` (int; None after a timeout), ``outcome`` ("ok", "refused", "blown", "failed",
+        "crashed" or "timeout"; ``EXIT_CODES``), ``wall_time`` [s], ``cpu_time`` [s] (the user and
+        system CPU of the finished child processes during the run) and ``reason`` ("" after "ok" and
+        "blown", else one line: what happened, the log's verdict and where the log is;
+        ``failure_reason``).
+
+    Raises
+    ------
+    FileNotFoundError
+        If Debian's ``yade`` is neither named by ``SPREADMAP_YADE`` nor on the PATH without the venv.
+    """
     script, raw_out, log_path = Path(script), Path(raw_out), Path(log_path)
     raw_out.parent.mkdir(parents=True, exist_ok=True)
     log_path.parent.mkdir(parents=True, exist_ok=True)
@@ -101,8 +133,38 @@ def finished_simulation(path: Path | str, params: dict) -> dict | None:
 
 
 def simulate(params: dict, script: Path | str, raw_out: Path | str, log_path: Path | str) -> dict:
-    """Run the case unless a finished simulation of the same parameters is already on disk; either
-    way the raw record ends up at raw_out (atomically). Returns the launcher result."""
+    """Run the case unless a finished simulation of the same parameters is already on disk.
+
+    Either way the raw record ends up at raw_out (atomically). The simulation is written to
+    ``simulated.json`` beside raw_out and re-used when it is a finished simulation (status "ok" or
+    "blown") of exactly these parameters (``finished_simulation``); after a run that finished, the
+    record gets the run's ``cpu_time`` [s] (the cost of the case). raw_out is a copy of it after
+    outcomes "ok" and "blown" only.
+
+    Parameters
+    ----------
+    params : dict
+        The case's parameters (``spreadmap.case.identity.case_scene``), as the script was rendered
+        with; ``timeout_s`` [s] is the run's outer timeout.
+    script : pathlib.Path or str
+        The rendered case script.
+    raw_out : pathlib.Path or str
+        Where the raw record ends up.
+    log_path : pathlib.Path or str
+        The case's log (written only when YADE runs).
+
+    Returns
+    -------
+    dict
+        The launcher result (``run_case``) with ``reused`` (bool). A re-used simulation: exit_code
+        0, outcome the record's status, wall_time 0.0, a reason naming the file re-used, no
+        ``cpu_time``.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the case has to run and Debian's ``yade`` is not found (``run_case``).
+    """
     raw_out = Path(raw_out)
     simulated = raw_out.with_name("simulated.json")
     reused = finished_simulation(simulated, params)
@@ -162,14 +224,49 @@ def failure_reason(exit_code: int | None, outcome: str, log_path: Path | str, ti
 
 
 def retry_wanted(result: dict, attempt: int, retries: int) -> bool:
-    """Whether a run that produced no result is worth another attempt: a crash or a timeout may
-    not recur; the YADE script's own verdicts (refused, failed) would. `attempt` counts from 1."""
+    """Whether a run that produced no result is worth another attempt.
+
+    A crash or a timeout may not recur (``RETRIED_OUTCOMES``); the YADE script's own verdicts
+    (refused, failed) would.
+
+    Parameters
+    ----------
+    result : dict
+        The launcher result (``run_case`` or ``simulate``): its ``outcome``.
+    attempt : int
+        The attempt that gave it, counting from 1.
+    retries : int
+        How many attempts after the first are allowed.
+
+    Returns
+    -------
+    bool
+        True when the outcome is "crashed" or "timeout" and ``attempt <= retries``.
+    """
     return result["outcome"] in RETRIED_OUTCOMES and attempt <= retries
 
 
 def failure_record(params: dict, result: dict, log_path: Path | str) -> dict:
-    """The raw record of a case that produced no result (refusal, failed check, crash, timeout):
-    status "refused" for a refusal, else "failed", with the reason and the log's tail."""
+    """The raw record of a case that produced no result (refusal, failed check, crash, timeout).
+
+    Status "refused" for a refusal, else "failed", with the reason and the log's tail.
+
+    Parameters
+    ----------
+    params : dict
+        The case's parameters, kept in the record.
+    result : dict
+        The launcher result (``run_case`` or ``simulate``).
+    log_path : pathlib.Path or str
+        The case's log.
+
+    Returns
+    -------
+    dict
+        ``format`` ("spreadmap-raw-1"), ``status``, ``reason`` (the result's reason, else its
+        outcome), ``params``, ``wall_time`` [s], ``exit_code`` and ``log_tail`` (the log's last 15
+        lines; "" when it cannot be read).
+    """
     status = "refused" if result["outcome"] == "refused" else "failed"
     return {"format": "spreadmap-raw-1", "status": status, "reason": result["reason"] or result["outcome"],
             "params": params, "wall_time": result["wall_time"], "exit_code": result["exit_code"],
@@ -177,4 +274,18 @@ def failure_record(params: dict, result: dict, log_path: Path | str) -> dict:
 
 
 def write_json_atomically(path: Path | str, data: dict) -> None:
+    """Write a record as JSON (indent 1) to a file, atomically and durably (spreadmap.files).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The file; its folder is created if missing.
+    data : dict
+        The record (JSON-serialisable).
+
+    Raises
+    ------
+    OSError
+        If the write fails; the file is left as it was (``spreadmap.files.atomic_path``).
+    """
     write_text_atomically(path, json.dumps(data, indent=1))

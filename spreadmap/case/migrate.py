@@ -32,7 +32,19 @@ _LEGACY = re.compile(LEGACY_CASE_ID_PATTERN)
 
 
 def legacy_case_folders(cases_dir: Path | str) -> list[Path]:
-    """The folders of cases_dir named by a legacy case id (sorted)."""
+    """The folders of cases_dir named by a legacy case id (sorted).
+
+    Parameters
+    ----------
+    cases_dir : pathlib.Path or str
+        The cases' folder (results/cases).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The sub-folders whose whole name matches ``LEGACY_CASE_ID_PATTERN``, sorted; [] when
+        cases_dir is not a folder.
+    """
     cases_dir = Path(cases_dir)
     if not cases_dir.is_dir():
         return []
@@ -95,8 +107,26 @@ def _rewrite_ids(folder: Path, old: str, new: str) -> list[str]:
 
 
 def migrate_case_folders(cases_dir: Path | str, dry_run: bool = False) -> dict:
-    """Rename every legacy case folder of cases_dir that can be keyed to its content id (and the id
-    inside its files); leave the others. Returns {"renamed": [(old, new, source)], "left": [(old, why)]}."""
+    """Rename every legacy case folder of cases_dir that can be keyed to its content id; leave the others.
+
+    The id inside its text files (``TEXT_SUFFIXES``) is rewritten too, and every file and the folder
+    keep their modification times (see the module docstring). A folder that cannot be keyed, or whose
+    content id is taken already, is left where it is and reported.
+
+    Parameters
+    ----------
+    cases_dir : pathlib.Path or str
+        The cases' folder (results/cases).
+    dry_run : bool, optional
+        True: report what would be renamed, change nothing.
+
+    Returns
+    -------
+    dict
+        ``{"renamed": [(old, new, source)], "left": [(old, why)]}``: the old and new folder names,
+        where the parameters came from (raw.json, simulated.json or case.py), and why a folder was
+        left.
+    """
     cases_dir = Path(cases_dir)
     report = {"renamed": [], "left": []}
     for folder in legacy_case_folders(cases_dir):

@@ -86,8 +86,24 @@ def _order_key(snapshots: dict, name: str) -> tuple:
 
 
 def choose_moments(snapshots: dict, n: int = 3) -> list[str]:
-    """The moments to draw, chronologically: blade start, window middle and window end where they
-    exist, filled up to ``n`` with the other recorded moments (window start, settled, ...)."""
+    """The moments to draw, chronologically.
+
+    Blade start, window middle and window end where they exist, filled up to ``n`` with the other
+    recorded moments (window start, settled, ...).
+
+    Parameters
+    ----------
+    snapshots : dict
+        A raw result's ``snapshots``: moment name -> snapshot (its ``time`` [s] orders moments of
+        no known name); None or empty: none.
+    n : int, optional
+        How many moments at most.
+
+    Returns
+    -------
+    list of str
+        The moments' names in chronological order (``MOMENT_ORDER``, then by time and name).
+    """
     snapshots = snapshots or {}
     present = sorted(snapshots, key=lambda m: _order_key(snapshots, m))
     chosen = [m for m in PREFERRED_MOMENTS if m in snapshots][:n]
@@ -114,8 +130,28 @@ def _arrays(snapshot: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def sphere_table(raw: dict, moments=None) -> pd.DataFrame:
-    """Every sphere of each moment (default: the moments :func:`choose_moments` picks), in um and
-    mm/s: columns ``moment, x_um, y_um, z_um, r_um, speed_mm_s``."""
+    """Every sphere of each moment, in um and mm/s: columns ``moment, x_um, y_um, z_um, r_um, speed_mm_s``.
+
+    Parameters
+    ----------
+    raw : dict
+        The case's raw result (its ``snapshots``: ``positions`` [m], ``radii`` [m], optionally
+        ``velocities`` [m/s]).
+    moments : iterable of str or None, optional
+        The moments; None: those :func:`choose_moments` picks.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per sphere and moment: ``moment``, the centre ``x_um``, ``y_um``, ``z_um`` [um], the
+        radius ``r_um`` [um] and ``speed_mm_s`` (|v| [mm/s]; NaN where the velocities are not
+        recorded); empty, with those columns, without moments.
+
+    Raises
+    ------
+    ValueError
+        If a snapshot's radii do not match its positions.
+    """
     snapshots = raw.get("snapshots") or {}
     moments = choose_moments(snapshots) if moments is None else list(moments)
     frames = []
@@ -179,6 +215,25 @@ def view_window(raw: dict, moments=None) -> dict:
     bed that is contiguous with the blade (centres within 4 d of one another); far stragglers
     are left out.  z runs from just below the floor to above the highest sphere in view (at most
     the blade top); y spans the side walls.
+
+    Parameters
+    ----------
+    raw : dict
+        The case's raw result (its ``snapshots``, ``params`` and ``geometry``, SI units).
+    moments : iterable of str or None, optional
+        The moments drawn; None: those :func:`choose_moments` picks.
+
+    Returns
+    -------
+    dict
+        ``x``, ``z`` and ``y``: (low, high) [um]; ``width``: the distance between the side walls
+        [um] (from the raw result, else from the spheres); ``d``: the particle diameter [um] (30
+        where the raw result does not say).
+
+    Raises
+    ------
+    ValueError
+        If a snapshot's radii do not match its positions.
     """
     snapshots = raw.get("snapshots") or {}
     moments = choose_moments(snapshots) if moments is None else list(moments)
@@ -281,7 +336,29 @@ def _fmt_num(x, digits=3):
 
 
 def build_case_figure(raw: dict, colour_by: str = "speed"):
-    """The figure (not saved) and the sphere table behind it. See the module docstring."""
+    """The figure (not saved) and the sphere table behind it. See the module docstring.
+
+    Parameters
+    ----------
+    raw : dict
+        The case's raw result (raw.json of yade_scripts/spreading_case.py, SI units).
+    colour_by : {"speed", "height"}, optional
+        Colour the spheres by their speed |v| [mm/s] or their height z [um].
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+        The figure; its ``spreadmap_axes`` holds the ``side`` and ``top`` axes, the ``colorbar``
+        axes and the ``moments`` drawn.
+    table : pandas.DataFrame
+        The spheres of the moments drawn (``sphere_table``).
+
+    Raises
+    ------
+    ValueError
+        If ``colour_by`` is neither "speed" nor "height", or a snapshot's radii do not match its
+        positions.
+    """
     if colour_by not in ("speed", "height"):
         raise ValueError(f"colour_by must be 'speed' or 'height', not {colour_by!r}")
     snapshots = raw.get("snapshots") or {}
@@ -494,9 +571,30 @@ def build_case_figure(raw: dict, colour_by: str = "speed"):
 
 
 def plot_case_views(raw: dict, path_stem, colour_by: str = "speed") -> dict[str, Path]:
-    """Draw side and top views of the bed at blade start, window middle and window end (or the
-    moments recorded), spheres to scale, coloured by speed (mm/s) or height (um); save
-    ``<path_stem>.png/.pdf`` and the sphere table ``<path_stem>.csv`` (columns ``moment, x_um,
-    y_um, z_um, r_um, speed_mm_s``; every sphere of each moment drawn).  Returns the paths."""
+    """Draw side and top views of the bed at blade start, window middle and window end (or the moments recorded).
+
+    Spheres to scale, coloured by speed (mm/s) or height (um); saves ``<path_stem>.png/.pdf`` and
+    the sphere table ``<path_stem>.csv`` (columns ``moment, x_um, y_um, z_um, r_um, speed_mm_s``;
+    every sphere of each moment drawn). See the module docstring for what the figure shows.
+
+    Parameters
+    ----------
+    raw : dict
+        The case's raw result (raw.json of yade_scripts/spreading_case.py, SI units).
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+    colour_by : {"speed", "height"}, optional
+        Colour the spheres by their speed |v| [mm/s] or their height z [um].
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``spreadmap.figures.save_figure``).
+
+    Raises
+    ------
+    ValueError
+        If ``colour_by`` is neither "speed" nor "height" (``build_case_figure``).
+    """
     fig, table = build_case_figure(raw, colour_by=colour_by)
     return save_figure(fig, path_stem, table)

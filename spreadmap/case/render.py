@@ -14,14 +14,52 @@ _RENDERED = re.compile(r"^PARAMS = (\{.*?\})\n# --- end of case parameters ---",
 
 
 def template_sha256(template: Path | str = TEMPLATE) -> str:
-    """Content hash of the scene template: part of every case's parameters, so that a change of
-    the scene re-renders and re-runs the cases (and invalidates finished simulations)."""
+    """Content hash of the scene template.
+
+    Part of every case's parameters, so that a change of the scene re-renders and re-runs the cases
+    (and invalidates finished simulations).
+
+    Parameters
+    ----------
+    template : pathlib.Path or str, optional
+        The scene template; default: the shipped yade_scripts/spreading_case.py (``TEMPLATE``).
+
+    Returns
+    -------
+    str
+        The first 16 hex digits of the SHA-256 of the template's bytes.
+    """
     import hashlib
 
     return hashlib.sha256(Path(template).read_bytes()).hexdigest()[:16]
 
 
 def render(params: dict, template: Path | str = TEMPLATE) -> str:
+    """The YADE scene template with its PARAMS block replaced by one case's parameters.
+
+    Everything else is kept verbatim, so the rendered script is readable and re-runnable by hand
+    with ``yade -n -x case.py``; the block's header names the case, and the parameters are written
+    in their own order (``pprint``, width 100), so that ``rendered_params`` reads them back.
+
+    Parameters
+    ----------
+    params : dict
+        The case's parameters (``spreadmap.case.identity.case_scene``), with ``case_id``.
+    template : pathlib.Path or str, optional
+        The scene template; default: the shipped yade_scripts/spreading_case.py (``TEMPLATE``).
+
+    Returns
+    -------
+    str
+        The rendered script's text.
+
+    Raises
+    ------
+    ValueError
+        If the parameters' ``scene_sha256`` (when present) is not the template's hash (the case was
+        derived for another version of it), or the template has no PARAMS block between the
+        case-parameter markers.
+    """
     text = Path(template).read_text()
     if params.get("scene_sha256") not in (None, template_sha256(template)):
         raise ValueError(f"case {params['case_id']} was derived for another version of {template}")
@@ -33,8 +71,23 @@ def render(params: dict, template: Path | str = TEMPLATE) -> str:
 
 
 def rendered_params(text: str) -> dict:
-    """The parameters a script rendered by `render` carries (its PARAMS block read back); ValueError
-    when there is no such block or it is not a literal dict."""
+    """The parameters a script rendered by `render` carries (its PARAMS block read back).
+
+    Parameters
+    ----------
+    text : str
+        The rendered script's text.
+
+    Returns
+    -------
+    dict
+        The PARAMS block's literal dict.
+
+    Raises
+    ------
+    ValueError
+        When there is no such block, or it is not a literal dict.
+    """
     import ast
 
     match = _RENDERED.search(text)

@@ -14,7 +14,12 @@ DENSEST_PACKING = math.pi / (3.0 * math.sqrt(2.0))  # 0.7405
 
 
 class UnsafeTimeStep(ValueError):
-    """A forced time step above the critical step of a case."""
+    """A forced time step above the critical step of a case.
+
+    A ValueError raised by ``time_step`` (so by ``scene_parameters`` and
+    ``spreadmap.case.identity.case_scene``) before anything runs; its message names the config key,
+    the forced and the critical step.
+    """
 
 
 def rayleigh_time_step(radius: float, density: float, young: float, poisson: float) -> float:
@@ -39,8 +44,24 @@ def configured_counting_c(config: dict) -> float:
 
 
 def precision_target(preset: dict, config: dict) -> float | None:
-    """Spheres that must pass under the blade in the window for the relative SD of MFR the preset
-    asks for (`target_cv`): N = (c / target_cv)^2. None when the preset has a fixed window."""
+    """Spheres that must pass under the blade in the window for the relative SD of MFR the preset asks for.
+
+    N = (c / target_cv)^2, rounded up, with c the counting noise's constant (a case's relative SD of
+    MFR = c / sqrt(N)).
+
+    Parameters
+    ----------
+    preset : dict
+        A preset of the config (``presets.<name>``): its ``target_cv`` [-], the relative SD of MFR
+        asked for; absent or None: a fixed window.
+    config : dict
+        The loaded configuration: ``metrics.counting_noise_c`` [-].
+
+    Returns
+    -------
+    float or None
+        N, a whole number of spheres; None when the preset has a fixed window.
+    """
     cv = preset.get("target_cv")
     if cv is None:
         return None
@@ -63,8 +84,44 @@ def time_step(diameter: float, density: float, material: dict, preset: dict, pre
 
 
 def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, seed: int | None = None) -> dict:
-    """The PARAMS dict of the YADE scene script for design point `point`
-    (keys f, d_um, h_um, v_mm_s) at preset `preset_name`."""
+    """The PARAMS dict of the YADE scene script for design point `point` at preset `preset_name`.
+
+    Every number is derived from the point, the preset and the configuration, in SI units; domain
+    sizes are set in particle diameters and the time step is ``dt_factor`` x the Rayleigh critical
+    step, unless the preset forces one (see the module docstring).
+
+    Parameters
+    ----------
+    point : dict
+        The design point: ``f`` [-], ``d_um`` [um], ``h_um`` [um], ``v_mm_s`` [mm/s].
+    preset_name : str
+        The preset (a key of the config's ``presets``).
+    config : dict
+        The loaded configuration (``spreadmap.config.load``): presets, material, scene, metrics.
+    case_id : str
+        The id written into the parameters (``case_id``) and named in error messages.
+    seed : int or None, optional
+        The packing seed; None: the scene's (config ``scene.seed``).
+
+    Returns
+    -------
+    dict
+        The PARAMS of the scene script, SI units: among them ``case_id``, ``point`` (as given, floats),
+        ``diameter`` and ``gap`` [m], ``blade_speed`` [m/s], ``density`` [kg/m3], ``time_step`` and
+        ``critical_time_step`` [s], the domain (``width``, ``pile_length``, ``pile_height``,
+        ``cloud_height`` [m]), ``n_particles``, ``seed``, ``preset``, ``timeout_s`` [s], the floor
+        (``substrate``, ``substrate_jitter``) and the window's target ``target_passed`` (spheres; None
+        with a fixed window).
+
+    Raises
+    ------
+    ValueError
+        If a parameter of the point is not a positive finite number.
+    UnsafeTimeStep
+        If the preset forces a time step (``time_step_s``) above the case's critical step.
+    KeyError
+        If ``preset_name`` is not a preset of the config.
+    """
     for key in ("f", "d_um", "h_um", "v_mm_s"):
         value = point[key]
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):

@@ -43,12 +43,30 @@ COVERED = math.pi / (2.0 * math.sqrt(3.0))  # share of the plane under a sphere'
 
 
 def mean_hollow_depth(jitter: float, hole_depth: float | None = None) -> float:
-    """Mean depth below z = 0 of the rough substrate's upper surface, in units of d, averaged over
-    the plane and over the random depths of its spheres (lowered by up to ``jitter`` x R).
+    """Mean depth below z = 0 of the rough substrate's upper surface, in units of d.
 
-    hole_depth None: the mean over the part of the plane the caps cover (the holes between three
-    spheres, 9.3 % of it, left out); a number: the mean over the whole plane with the holes at that
-    depth (in d; 1.0: the backstop floor under the scene's substrate)."""
+    Averaged over the plane and over the random depths of its spheres (lowered by up to ``jitter``
+    x R): D = 1/6 + jitter / 4 over the part of the plane the caps cover (see the module docstring).
+
+    Parameters
+    ----------
+    jitter : float
+        The largest depth a substrate sphere is lowered by, in radii R [-]; in [0, 1].
+    hole_depth : float or None, optional
+        None: the mean over the part of the plane the caps cover (the holes between three spheres,
+        9.3 % of it, left out); a number: the mean over the whole plane with the holes at that
+        depth (in d; 1.0: the backstop floor under the scene's substrate).
+
+    Returns
+    -------
+    float
+        The mean depth [d].
+
+    Raises
+    ------
+    ValueError
+        If ``jitter`` is outside [0, 1].
+    """
     if not 0.0 <= jitter <= 1.0:
         raise ValueError(f"substrate jitter {jitter} outside [0, 1] (a depth in radii, up to one radius)")
     caps = 1.0 / 6.0 + jitter / 4.0
@@ -66,19 +84,74 @@ def hollow_depth(substrate, jitter) -> float:
 
 
 def effective_gap_um(h_um: float, d_um: float, substrate, jitter) -> float:
-    """The effective gap [um] of a case: h on a flat floor, h + the mean hollow depth on a rough one."""
+    """The effective gap [um] of a case: h on a flat floor, h + the mean hollow depth on a rough one.
+
+    Parameters
+    ----------
+    h_um : float
+        The nominal gap h [um].
+    d_um : float
+        The particle diameter d [um].
+    substrate : str
+        The floor: "flat" or "rough" (anything else: unknown).
+    jitter : float or None
+        A rough floor's jitter [R]; None or NaN: unknown.
+
+    Returns
+    -------
+    float
+        h + D d [um], D the mean hollow depth (``mean_hollow_depth``; 0 on a flat floor); NaN
+        where the floor (or a rough floor's jitter) is unknown.
+
+    Raises
+    ------
+    ValueError
+        If a rough floor's jitter is outside [0, 1].
+    """
     return float(h_um) + hollow_depth(substrate, jitter) * float(d_um)
 
 
 def floor_of(config: dict | None) -> tuple[str, float]:
-    """(kind, jitter) of the floor a config's cases are spread on (``scene.substrate``, schema defaults)."""
+    """(kind, jitter) of the floor a config's cases are spread on (``scene.substrate``, schema defaults).
+
+    Parameters
+    ----------
+    config : dict or None
+        The configuration; None, or one without ``scene.substrate``: the defaults.
+
+    Returns
+    -------
+    kind : str
+        "flat" or "rough" (as the config says; default "flat").
+    jitter : float
+        The rough floor's jitter [R] (default 0.5).
+    """
     substrate = ((config or {}).get("scene") or {}).get("substrate") or {}
     return substrate.get("kind", FLAT), float(substrate.get("jitter", DEFAULT_JITTER))
 
 
 def floor_label(config: dict | None) -> str:
-    """The floor and the gap a map, table or report is for, from the config: 'flat floor; ...' or
-    'rough floor (previous layer, jitter 0.5 R); ...' with the effective gap in units of d."""
+    """The floor and the gap a map, table or report is for, from the config.
+
+    'flat floor; ...' or 'rough floor (previous layer, jitter 0.5 R); ...' with the effective gap in
+    units of d.
+
+    Parameters
+    ----------
+    config : dict or None
+        The configuration the cases ran with (``scene.substrate``); None: the defaults (flat).
+
+    Returns
+    -------
+    str
+        The label, named on every map, table and report.
+
+    Raises
+    ------
+    ValueError
+        If ``scene.substrate.kind`` is neither "flat" nor "rough", or a rough floor's jitter is
+        outside [0, 1].
+    """
     kind, jitter = floor_of(config)
     if kind == FLAT:
         return "flat floor; gap h from the floor"

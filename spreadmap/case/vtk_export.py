@@ -65,10 +65,29 @@ def _fmt(values: np.ndarray) -> str:
 def write_vtk(snapshot: dict, path, title: str = "spreadmap spheres") -> Path:
     """Write one snapshot's spheres as a legacy ASCII VTK PolyData file at ``path`` (atomically).
 
-    ``snapshot`` holds ``positions`` [[x, y, z], ...] (m), ``radii`` [...] (m) and, optionally,
-    ``velocities`` [[vx, vy, vz], ...] (m/s; zeros if absent).  ``title`` goes on the header's
-    title line (one line, at most 255 characters).  Open the file in ParaView; see the module
-    docstring for drawing the points as spheres.  Returns the path.
+    Open the file in ParaView; see the module docstring for the format and for drawing the points
+    as spheres.
+
+    Parameters
+    ----------
+    snapshot : dict
+        ``positions`` [[x, y, z], ...] (m), ``radii`` [...] (m) and, optionally, ``velocities``
+        [[vx, vy, vz], ...] (m/s; zeros if absent).
+    path : pathlib.Path or str
+        The file to write; its folder is created if missing.
+    title : str, optional
+        The header's title line (white space folded to one line, at most 255 characters; empty:
+        the default).
+
+    Returns
+    -------
+    pathlib.Path
+        The path.
+
+    Raises
+    ------
+    ValueError
+        If the snapshot's positions, radii and velocities disagree in number.
     """
     pos, rad, vel = _snapshot_arrays(snapshot)
     n = len(pos)
@@ -97,9 +116,28 @@ def _moment_key(raw_snapshots: dict, name: str) -> tuple:
 def export_case(raw: dict, outdir) -> list[Path]:
     """Write every snapshot of a raw result as ``<outdir>/<moment>.vtk`` (e.g. ``window_end.vtk``).
 
-    Returns the paths in chronological order of the moments (settled, blade_start,
-    window_start, window_middle, window_end, then any other moment by name).  A raw result
-    without snapshots gives an empty list.  Open the files in ParaView (legacy VTK reader).
+    Open the files in ParaView (legacy VTK reader). Each file's title names the case, the moment
+    and its time.
+
+    Parameters
+    ----------
+    raw : dict
+        The case's raw result: its ``snapshots`` (moment -> ``write_vtk``'s snapshot, with its
+        ``time`` [s]) and ``params`` (``case_id``).
+    outdir : pathlib.Path or str
+        The folder of the files (created if missing).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The paths in chronological order of the moments (settled, blade_start, window_start,
+        window_middle, window_end, then any other moment by name); empty for a raw result without
+        snapshots.
+
+    Raises
+    ------
+    ValueError
+        If a snapshot's arrays disagree in number (``write_vtk``).
     """
     snapshots = raw.get("snapshots") or {}
     case = (raw.get("params") or {}).get("case_id", "")

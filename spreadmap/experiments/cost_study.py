@@ -23,8 +23,23 @@ METHODS = ("lds", "active", "active_per_cpu")
 
 
 def cpu_needed(table: pd.DataFrame, target: float) -> pd.DataFrame:
-    """Per method and seed: CPU hours spent when the map RMSE first reached ``target`` (NaN: not
-    within the run), and the CPU hours the run spent in all."""
+    """Per method and seed: CPU hours spent when the map RMSE first reached ``target``, and the run's CPU hours.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``noisy_study.run``'s table: ``method``, ``seed``, ``n``, ``map_rmse`` and ``cpu_cases`` [s]
+        (the cases' CPU so far).
+    target : float
+        The map-RMSE target (MFR units, dimensionless).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (method, seed): ``method``, ``seed``, ``target``, ``cpu_h`` [h] (the CPU of the
+        first checkpoint at or below the target; NaN: not within the run), ``cases`` (its n; NaN
+        likewise) and ``run_cpu_h`` [h] (the CPU the run spent in all).
+    """
     rows = []
     for (method, seed), g in table.groupby(["method", "seed"], sort=False):
         g = g.sort_values("n")
@@ -37,9 +52,27 @@ def cpu_needed(table: pd.DataFrame, target: float) -> pd.DataFrame:
 
 
 def summarise(needed: pd.DataFrame, baseline: str = "active", candidate: str = "active_per_cpu") -> pd.DataFrame:
-    """Median and range over seeds of the CPU hours and cases needed per method and target, and
-    the per-seed ratio baseline / candidate (a seed where only one reached the target is left
-    out of the ratio and counted in ``not_reached``)."""
+    """Median and range over seeds of the CPU hours and cases needed per method and target; per-seed ratios.
+
+    The per-seed ratio baseline / candidate of the CPU hours: a seed where only one reached the
+    target is left out of the ratio and counted in ``not_reached``.
+
+    Parameters
+    ----------
+    needed : pandas.DataFrame
+        ``cpu_needed``'s tables (one or several targets).
+    baseline : str, optional
+        The method in the ratio's numerator.
+    candidate : str, optional
+        The method in its denominator; its rows carry the ratio.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (method, target): ``runs``, ``not_reached``, ``cpu_h_median``, ``cpu_h_min``,
+        ``cpu_h_max`` [h] and ``cases_median`` over the seeds that reached it; the candidate's rows
+        also ``ratio_<baseline>_median``, ``_min``, ``_max`` and ``paired_seeds``.
+    """
     rows = []
     for (method, target), g in needed.groupby(["method", "target"], sort=False):
         ok = g["cpu_h"].notna()

@@ -194,7 +194,50 @@ def run(methods: Sequence[str] = ("lds", "random", "lattice", "active"),
         partial: str | Path | None = None) -> pd.DataFrame:
     """The tidy table: method, noise, seed, n, map_rmse, box_rmse, cpu_s (one row per checkpoint).
 
-    ``partial``: a CSV rewritten after every seed (the rows so far)."""
+    Every run of a design, noise model and seed refits the map's model from scratch at each
+    checkpoint and measures its RMSE against the truth over the map grids (see the module
+    docstring); seeds are the outer loop, so a run cut short has every design and noise at equal
+    seeds.
+
+    Parameters
+    ----------
+    methods : sequence of str, optional
+        The designs: "lds", "random", "lattice", "active", "active_per_cpu".
+    noises : sequence of str, optional
+        The noise models (keys of ``NOISE_MODELS``).
+    seeds : sequence of int, optional
+        The seeds.
+    n_max : int, optional
+        Cases per run at most (the budget).
+    start : int, optional
+        Cases in the active designs' LDS start.
+    batch : int, optional
+        Cases per batch of the active designs.
+    checkpoints : sequence of int or None, optional
+        The numbers of cases at which the map is scored; None: every batch (start, start + batch,
+        ..., n_max). The lattice is scored at its sizes k^4 <= n_max instead.
+    truth : callable, optional
+        The truth on the unit cube, u[n, 4] -> y[n]; default ``mfr_like``.
+    n_candidates : int, optional
+        Candidate points per batch of the active designs.
+    log : callable or None, optional
+        Called with one line after each run (its CPU seconds); None: silent.
+    partial : pathlib.Path or str or None, optional
+        A CSV rewritten after every seed (the rows so far); None: none.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per checkpoint: ``method``, ``noise``, ``seed``, ``n``, ``map_rmse`` (over all the
+        map grids) and ``box_rmse`` (over the box alone), in MFR units; ``cpu_s`` (the process CPU
+        time [s] at that checkpoint: the fit, its RMSE and, for the active designs, the batch
+        choice) and ``cpu_cases`` (the cases' CPU so far by the cost law with its scatter [s]).
+
+    Raises
+    ------
+    ValueError
+        If a method or a noise model is unknown.
+    """
     if checkpoints is None:  # every batch
         checkpoints = [n for n in range(start, n_max + 1, batch)]
     lattice_n = [k**len(NAMES) for k in range(2, 12) if k**len(NAMES) <= n_max]
@@ -214,7 +257,21 @@ def run(methods: Sequence[str] = ("lds", "random", "lattice", "active"),
 
 
 def cases_needed(table: pd.DataFrame, target: float) -> pd.DataFrame:
-    """Per method, noise and seed: the first n with map RMSE <= target (NaN: not reached)."""
+    """Per method, noise and seed: the first n with map RMSE <= target (NaN: not reached).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``run``'s table.
+    target : float
+        The map-RMSE target (MFR units, dimensionless).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (method, noise, seed): ``method``, ``noise``, ``seed``, ``target``,
+        ``n_needed`` (float; NaN: not reached) and ``budget`` (the run's largest n).
+    """
     rows = []
     for (m, z, s), g in table.groupby(["method", "noise", "seed"], sort=False):
         g = g.sort_values("n")
@@ -225,8 +282,22 @@ def cases_needed(table: pd.DataFrame, target: float) -> pd.DataFrame:
 
 
 def summarise(needed: pd.DataFrame) -> pd.DataFrame:
-    """Median, quartiles, min and max of n_needed over seeds; not-reached runs count as above
-    the budget (a quantile among them is NaN, ``not_reached`` says how many)."""
+    """Median, quartiles, min and max of n_needed over seeds, per method, noise and target.
+
+    Not-reached runs count as above the budget (a quantile among them is NaN, ``not_reached`` says
+    how many). Quantiles are ``numpy.quantile(method="lower")``: always an observed n.
+
+    Parameters
+    ----------
+    needed : pandas.DataFrame
+        ``cases_needed``'s tables (one or several targets).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (method, noise, target): ``runs``, ``not_reached``, ``min``, ``q25``,
+        ``median``, ``q75``, ``max`` (cases) and ``budget``.
+    """
     rows = []
     for (m, z, tgt), g in needed.groupby(["method", "noise", "target"], sort=False):
         v = np.where(np.isnan(g["n_needed"].to_numpy(float)), np.inf, g["n_needed"].to_numpy(float))
@@ -239,7 +310,19 @@ def summarise(needed: pd.DataFrame) -> pd.DataFrame:
 
 
 def rmse_summary(table: pd.DataFrame) -> pd.DataFrame:
-    """Median and quartiles of the map RMSE over seeds at each n, per method and noise."""
+    """Median and quartiles of the map RMSE over seeds at each n, per method and noise.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``run``'s table.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (method, noise, n): ``median``, ``q25``, ``q75`` of ``map_rmse`` (MFR units)
+        and ``runs``.
+    """
     g = table.groupby(["method", "noise", "n"])["map_rmse"]
     return pd.DataFrame({"median": g.median(), "q25": g.quantile(0.25), "q75": g.quantile(0.75),
                          "runs": g.size()}).reset_index()

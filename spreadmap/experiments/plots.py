@@ -24,10 +24,23 @@ def plot_sampling_study(table: pd.DataFrame, path_stem,
                         summary: pd.DataFrame | None = None) -> dict[str, Path]:
     """Cases needed per design, per function: each seed as a dot, median with IQR bars.
 
-    ``table``: ``sampling_study.run_study`` output; ``summary`` defaults to
-    ``sampling_study.summarise(table)``.  Runs that did not converge within the budget are drawn
-    at the budget as open upward triangles (censored).  The CSV holds the tidy table joined with
-    the summary columns (median, q25, q75, iqr, not_converged) of its group.
+    Runs that did not converge within the budget are drawn at the budget as open upward triangles
+    (censored). The CSV holds the tidy table joined with the summary columns (median, q25, q75, iqr,
+    not_converged) of its group.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``sampling_study.run_study`` output.
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+    summary : pandas.DataFrame or None, optional
+        ``sampling_study.summarise(table)``; None: computed here.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
     """
     from .sampling_study import summarise  # local: keeps the plot module import-light
 
@@ -94,10 +107,28 @@ METHOD_STYLE = {"lds": ("C0", "o"), "random": ("C1", "v"), "lattice": ("C2", "s"
 
 
 def plot_noisy_study(table: pd.DataFrame, summary: pd.DataFrame, rs: pd.DataFrame, path_stem) -> dict[str, Path]:
-    """Map RMSE against the number of cases, one panel per noise model: median over seeds
-    (line and markers) and the band between the quartiles, each method in its colour; the
-    targets of ``summary`` as dotted lines.  ``rs``: ``noisy_study.rmse_summary(table)``.
-    CSV: the median and quartiles behind the lines."""
+    """Map RMSE against the number of cases, one panel per noise model.
+
+    Median over seeds (line and markers) and the band between the quartiles, each method in its
+    colour; the targets of ``summary`` as dotted lines. CSV: the median and quartiles behind the
+    lines.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``noisy_study.run``'s table.
+    summary : pandas.DataFrame
+        ``noisy_study.summarise``'s table (its ``target`` values are drawn).
+    rs : pandas.DataFrame
+        ``noisy_study.rmse_summary(table)`` (also the CSV saved).
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     noises = list(dict.fromkeys(table["noise"]))
     fig = new_figure(4.2 * len(noises), 4.2)
     axes = np.atleast_1d(fig.subplots(1, len(noises), sharey=True))
@@ -130,9 +161,26 @@ def plot_noisy_study(table: pd.DataFrame, summary: pd.DataFrame, rs: pd.DataFram
 
 
 def plot_cost_study(table: pd.DataFrame, targets: Sequence[float], path_stem) -> dict[str, Path]:
-    """Map RMSE against cases (left) and against the CPU hours they cost (right), per design:
-    median over seeds at each checkpoint (the CPU too), band = quartiles of the RMSE; the targets
-    as dotted lines.  CSV: the medians and quartiles behind the lines."""
+    """Map RMSE against cases (left) and against the CPU hours they cost (right), per design.
+
+    Median over seeds at each checkpoint (the CPU too), band = quartiles of the RMSE; the targets as
+    dotted lines. CSV: the medians and quartiles behind the lines.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``noisy_study.run``'s table (``method``, ``n``, ``map_rmse``, ``cpu_cases`` [s]).
+    targets : sequence of float
+        The map-RMSE targets drawn (MFR units).
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``); the CSV per
+        (method, n): ``median``, ``q25``, ``q75`` of the RMSE, ``cpu_h`` [h] (median) and ``runs``.
+    """
     g = table.groupby(["method", "n"])
     rs = pd.DataFrame({"median": g["map_rmse"].median(), "q25": g["map_rmse"].quantile(0.25),
                        "q75": g["map_rmse"].quantile(0.75), "cpu_h": g["cpu_cases"].median() / 3600,

@@ -101,7 +101,29 @@ class World:
 
 
 def build_world(published: pd.DataFrame, config: Mapping, law: Mapping, rho: float = 0.9) -> World:
-    """The truth and the noise law from the published cases (calibrated SDs, usable rows)."""
+    """The truth and the noise law from the published cases (calibrated SDs, usable rows).
+
+    The map model (``model.make_map_fit``, final fit) is fitted per target on the usable rows; its
+    posterior mean is the truth and its per-case noise model (fitted on the same SDs) the noise law.
+
+    Parameters
+    ----------
+    published : pandas.DataFrame
+        The published cases (a results table with each case's calibrated SD, ``<t>_sd``, per
+        target of ``TARGETS``); the truth is fitted on its usable rows.
+    config : Mapping
+        The validated config (presets, scene, material, metrics, surrogate, converge, maps).
+    law : Mapping
+        The planned-cost law: ``ln_a``, ``b_particles``, ``b_steps`` and ``residual_sd``
+        (``spreadmap.loop.cost.fit_law``).
+    rho : float, optional
+        The correlation of MFR's and PD's noise in one case.
+
+    Returns
+    -------
+    World
+        The world, its ``notes`` saying how many usable cases it was fitted on.
+    """
     fit = make_map_fit(config.get("surrogate"), final=True)
     truth, noise = {}, {}
     for t in TARGETS:
@@ -127,8 +149,36 @@ def true_error(model_by_target: Mapping, world: World, grids: Mapping[str, np.nd
 
 def replay_one(world: World, design: Mapping, seed: int, max_cases: int = 160,
                max_cpu_h: float | None = None, maps_cfg: Mapping | None = None) -> pd.DataFrame:
-    """One replay of the loop (``design``: converge settings overriding the config's, and
-    ``preset``), run to ``max_cases`` or ``max_cpu_h`` of modelled CPU. One row per step."""
+    """One replay of the loop, run to ``max_cases`` or ``max_cpu_h`` of modelled CPU. One row per step.
+
+    The stop rule never stops it (the path goes on whatever the rule says; ``stops`` finds where each
+    tolerance would have stopped it). See the module docstring.
+
+    Parameters
+    ----------
+    world : World
+        The truth, noise and cost the cases are drawn from (``build_world``).
+    design : Mapping
+        Converge settings overriding the config's (e.g. ``sampling``, ``acquisition``, ``batch``),
+        ``name`` and optionally ``preset`` (default: the config's); see ``DESIGNS``.
+    seed : int
+        The replay's seed (its LDS start is seeded 1000 + seed).
+    max_cases : int, optional
+        The budget in cases.
+    max_cpu_h : float or None, optional
+        The budget in modelled CPU hours [h]; None: none.
+    maps_cfg : Mapping or None, optional
+        The config's ``maps`` section for the map grids; None: the world's config's.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per step: ``design``, ``seed``, ``n``, ``cpu_h_modelled``, ``cpu_h_measured`` [h],
+        ``n_lds``, ``reason``, and per target the rule's ``_estimate`` (before any margin),
+        ``_cv_net``, ``_cv_rmse``, ``_cv_noise``, ``_cv_n``, ``_posterior`` (worst grid) and
+        ``_posterior_<grid>``, the true error ``_true`` (worst grid) and ``_true_<grid>``, and
+        ``_noise_sd`` (RMS of the cases' stated SDs).
+    """
     cfg = world.config
     conv = {**dict(cfg["converge"]), **{k: v for k, v in design.items() if k not in ("name", "preset")},
             "budget": int(max_cases), "cpu_budget_h": max_cpu_h, "seed": int(seed)}
@@ -181,10 +231,31 @@ def replay_one(world: World, design: Mapping, seed: int, max_cases: int = 160,
 
 def stops(paths: pd.DataFrame, tolerance: Mapping[str, float], hold_for: int = 1,
           margin: float = 1.0) -> pd.DataFrame:
-    """Where each replay would have stopped with this tolerance per target (the first step at
-    which every target's estimate times ``margin`` is within it, ``hold_for`` steps in a row), its
-    cost and its true error; a replay that never stops within its path is a row with ``stopped``
-    False."""
+    """Where each replay would have stopped with this tolerance per target, its cost and its true error.
+
+    The stop is the first step at which every target's estimate times ``margin`` is within its
+    tolerance, ``hold_for`` steps in a row; a replay that never stops within its path is a row with
+    ``stopped`` False (its last step).
+
+    Parameters
+    ----------
+    paths : pandas.DataFrame
+        ``replay_one``'s tables of several replays (``design``, ``seed``, ``n``,
+        ``cpu_h_modelled``, ``<t>_estimate``, ``<t>_true``).
+    tolerance : Mapping of str to float
+        The tolerance per target (map-error units of the target).
+    hold_for : int, optional
+        Steps in a row the rule must hold.
+    margin : float, optional
+        Factor on the estimate.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (design, seed): ``stopped``, ``n``, ``cpu_h`` [h] (modelled), per target
+        ``_true`` and ``_estimate`` at the stop, and ``true_within`` (every target's true error
+        within its tolerance).
+    """
     out = []
     for (design, seed), p in paths.groupby(["design", "seed"], sort=True):
         p = p.sort_values("n")
@@ -211,9 +282,28 @@ def stops(paths: pd.DataFrame, tolerance: Mapping[str, float], hold_for: int = 1
 
 def calibrate_margin(paths: pd.DataFrame, tolerances: Sequence[float], share: float = 0.9,
                      grid: Sequence[float] = tuple(np.round(np.arange(1.0, 2.51, 0.05), 2))) -> float:
-    """The smallest margin at which the stops of ``paths`` (pooled over designs and tolerances)
-    have a true error within tolerance at least ``share`` of the time; NaN if none on the grid.
-    Calibrate on some seeds and judge on others: on the same replays the share is optimistic."""
+    """The smallest margin at which the stops of ``paths`` are honest at least ``share`` of the time.
+
+    Pooled over designs and tolerances, a stop is honest when its true error is within tolerance;
+    NaN if no margin on the grid does it. Calibrate on some seeds and judge on others: on the same
+    replays the share is optimistic.
+
+    Parameters
+    ----------
+    paths : pandas.DataFrame
+        ``replay_one``'s tables of the calibration replays.
+    tolerances : sequence of float
+        The tolerances, each the same for every target.
+    share : float, optional
+        The share of honest stops asked for, in (0, 1].
+    grid : sequence of float, optional
+        The margins tried, in order (default 1.0 to 2.5 by 0.05).
+
+    Returns
+    -------
+    float
+        The first margin of ``grid`` that does it; NaN if none.
+    """
     for m in grid:
         st = pd.concat([stops(paths, {t: tol for t in TARGETS}, margin=m) for tol in tolerances])
         st = st[st["stopped"]]
@@ -223,9 +313,23 @@ def calibrate_margin(paths: pd.DataFrame, tolerances: Sequence[float], share: fl
 
 
 def honesty(stopped: pd.DataFrame) -> pd.DataFrame:
-    """Per design: replays, stops, the share of stops whose true error is within tolerance with
-    its 95 % Clopper-Pearson interval, and the cases and modelled CPU at the stop (median and 90th
-    percentile)."""
+    """Per design: replays, stops, and the share of stops whose true error is within tolerance.
+
+    With its 95 % Clopper-Pearson interval, and the cases and modelled CPU at the stop (median and
+    90th percentile).
+
+    Parameters
+    ----------
+    stopped : pandas.DataFrame
+        ``stops``' table.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per design: ``replays``, ``stops``, ``within``, ``honest_share``, ``honest_low``,
+        ``honest_high``, ``cases_median``, ``cases_p90``, ``cpu_h_median`` and ``cpu_h_p90`` [h];
+        NaN where no replay stopped.
+    """
     from scipy.stats import binomtest
 
     rows = []

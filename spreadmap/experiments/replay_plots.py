@@ -12,6 +12,31 @@ from ..figures import new_figure, save_figure
 
 
 def plot_replay(paths: pd.DataFrame, honesty: pd.DataFrame, out: Path | str, shipped: str = "active_per_cpu"):
+    """The replay's figure: four panels from the replay's tables.
+
+    (a) the rule's estimate against the true error at every step of the ``shipped`` design; (b) the
+    true MFR error against modelled CPU, median and 10-90 % over seeds, per design; (c) per
+    tolerance, the share of honest stops with its 95 % interval (faint: the bare estimate, the
+    shipped design's only; solid: with the margin); (d) the modelled CPU at the stop per tolerance,
+    with the margin, median to p90.
+
+    Parameters
+    ----------
+    paths : pandas.DataFrame
+        ``replay.replay_one``'s tables of every replay.
+    honesty : pandas.DataFrame
+        ``replay.honesty``'s tables with ``tolerance`` (and, optionally, ``rule``) added (also the
+        CSV saved).
+    out : pathlib.Path or str
+        Where to save: ``<out>.png``, ``.pdf`` and ``.csv``.
+    shipped : str, optional
+        The design drawn in panel (a) (the first design where it is missing).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     import matplotlib.pyplot as plt
 
     designs = list(dict.fromkeys(paths["design"]))

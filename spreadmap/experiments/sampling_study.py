@@ -104,6 +104,16 @@ def flow_curve(u: np.ndarray) -> np.ndarray:
     With u in NAMES order (f, d, h, v) mapped to the SPEC ranges, the gap-to-diameter ratio
     r = h/d runs 1.1 .. 7.5; the flow rises from 0 at r = 1 and saturates, and falls with
     friction and blade speed: 0.7 (1 - exp(-(r - 1)/1.5)) (1 - (f - 0.15)) (1 - 0.02 (v - 5)).
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        Points of the unit cube, shape (n, 4), NAMES order.
+
+    Returns
+    -------
+    numpy.ndarray
+        The flow at each point, shape (n,) (dimensionless).
     """
     u = np.asarray(u, float)
     f = 0.15 + 0.30 * u[:, 0]
@@ -257,6 +267,17 @@ def summarise(table: pd.DataFrame) -> pd.DataFrame:
     or quartile that falls among them is NaN and ``not_converged`` says how many there were.
     Quartiles use ``numpy.quantile(method="lower")``: always an observed n (a lattice size, for
     the ``lattice_sizes`` schedule).  The lattice is one deterministic run: its IQR is 0.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``run_study``'s tidy table.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (function, method, schedule): ``q25``, ``median``, ``q75``, ``iqr`` (cases),
+        ``runs``, ``not_converged`` and ``budget``.
     """
     rows = []
     for (fn, method, sched), g in table.groupby(["function", "method", "schedule"], sort=False):
@@ -313,7 +334,24 @@ class StudyResult:
 
 
 def study(**kwargs) -> StudyResult:
-    """``run_study(**kwargs)`` with its summary and ratios."""
+    """``run_study(**kwargs)`` with its summary and ratios.
+
+    Parameters
+    ----------
+    **kwargs : dict
+        ``run_study``'s arguments (functions, predictor, ranges, seeds, k_max, n_max, tolerance,
+        floors, start, window, schedules).
+
+    Returns
+    -------
+    StudyResult
+        ``table`` (``run_study``), ``summary`` (``summarise``) and ``ratios`` (``ratios``).
+
+    Raises
+    ------
+    ValueError
+        If ``k_max`` is below 3 or a schedule is unknown (``run_study``).
+    """
     table = run_study(**kwargs)
     summ = summarise(table)
     return StudyResult(table, summ, ratios(summ))

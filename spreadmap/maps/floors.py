@@ -40,10 +40,34 @@ def ratio_quantile(m_a, s_a, m_b, s_b, q: float, lo: float = 1e-3, hi: float = 1
 
 
 def compare(model_a, model_b, frame: pd.DataFrame, targets, level: float = 0.95, min_value: float = 0.02) -> pd.DataFrame:
-    """Per point of ``frame`` (columns NAMES) and target: ``<t>_a``, ``<t>_a_sd``, ``<t>_b``,
-    ``<t>_b_sd`` (means and model SDs on each floor), ``<t>_diff`` with ``_lo``/``_hi`` (the interval
-    at ``level``), ``<t>_ratio`` (median) with ``_lo``/``_hi``, and ``<t>_ratio_defined``: floor B's
-    lower bound at ``level`` above ``min_value`` and floor A's mean positive. Also ``h_over_d``."""
+    """Per point of ``frame`` and target: both floors' means and model SDs, their difference and their ratio.
+
+    See the module docstring for the difference's interval and the ratio's quantiles (Fieller).
+
+    Parameters
+    ----------
+    model_a, model_b : spreadmap.surrogate.saved_model.SurrogateModel
+        The map models of floor A and floor B (each floor's results/surrogate/model.joblib); their
+        ``predict_stats`` give the mean and the model SD of each target.
+    frame : pandas.DataFrame
+        The points: columns NAMES (f [-], d_um [um], h_um [um], v_mm_s [mm/s]).
+    targets : sequence of str
+        The targets compared (targets of both models).
+    level : float, optional
+        The level of the intervals, in (0, 1).
+    min_value : float, optional
+        The ratio is defined only where floor B's lower bound at ``level`` lies above this (the
+        targets are dimensionless).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Per point: NAMES, ``h_over_d``, and per target ``<t>_a``, ``<t>_a_sd``, ``<t>_b``,
+        ``<t>_b_sd`` (means and model SDs on each floor), ``<t>_diff`` with ``_lo``/``_hi`` (the
+        interval at ``level``), ``<t>_ratio`` (median) with ``_lo``/``_hi`` (NaN where not
+        defined), and ``<t>_ratio_defined``: floor B's lower bound at ``level`` above
+        ``min_value`` and floor A's mean positive.
+    """
     X = frame[list(NAMES)].to_numpy(float)
     out = frame[list(NAMES)].copy()
     out["h_over_d"] = X[:, 2] / X[:, 1]
@@ -64,7 +88,22 @@ def compare(model_a, model_b, frame: pd.DataFrame, targets, level: float = 0.95,
 
 
 def box_sample(n: int, seed: int = 0, ranges=None) -> pd.DataFrame:
-    """n scrambled-Sobol' points over the design box (scipy.stats.qmc; n a power of 2)."""
+    """n scrambled-Sobol' points over the design box (scipy.stats.qmc; n a power of 2).
+
+    Parameters
+    ----------
+    n : int
+        How many points (a power of 2 keeps the Sobol' sequence balanced).
+    seed : int, optional
+        The scrambling seed.
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns NAMES (f [-], d_um [um], h_um [um], v_mm_s [mm/s]), one row per point.
+    """
     from scipy.stats import qmc
 
     u = qmc.Sobol(len(NAMES), scramble=True, seed=seed).random(n)
@@ -72,8 +111,29 @@ def box_sample(n: int, seed: int = 0, ranges=None) -> pd.DataFrame:
 
 
 def by_band(table: pd.DataFrame, target: str, edges=(1.0, 1.5, 2.0, 3.0, 5.0, 8.0)) -> pd.DataFrame:
-    """The ratio's spread over the box per h/d band: points, share with the ratio defined, the median
-    of the points' median ratios and their range, and the median of the points' interval widths."""
+    """The ratio's spread over the box per h/d band.
+
+    Per band: the points, how many have the ratio defined, the median of the points' median ratios
+    and their range, and the median of the points' interval widths.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``compare``'s table over the box (``h_over_d`` and the target's columns).
+    target : str
+        The target.
+    edges : sequence of float, optional
+        The band edges in h/d [-]; a band holds ``from <= h/d < below``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per band: ``h_over_d_from``, ``h_over_d_below``, ``points``, ``ratio_defined``
+        (points with the ratio defined), ``ratio_median``, ``ratio_min``, ``ratio_max`` (over
+        those points), ``interval_width_median`` (of ``_ratio_hi - _ratio_lo``) and
+        ``diff_median`` (the median difference over all the band's points); NaN where no point
+        counts.
+    """
     rows = []
     for lo, hi in zip(edges[:-1], edges[1:]):
         part = table[(table["h_over_d"] >= lo) & (table["h_over_d"] < hi)]
@@ -90,12 +150,33 @@ def by_band(table: pd.DataFrame, target: str, edges=(1.0, 1.5, 2.0, 3.0, 5.0, 8.
 
 
 def piles_by_band(cases: pd.DataFrame, min_heap_h2: float, edges=(1.0, 1.5, 2.0, 3.0, 5.0, 8.0)) -> pd.DataFrame:
-    """A floor's sweep read for drained piles, per h/d band (issue 36): cases, finished, flagged; of
-    the flagged, those whose pile ran down (less than `min_heap_h2` h^2 ahead of the blade at the
-    window's end, or no heap measured) and those whose flow was unsteady with the heap full; spheres
-    rolled off the floor's ends (median, max, median share of the case's spheres); the heap at the
-    window's end in h^2 (min, median); median MFR of the usable cases. Rows of every band, empty
-    ones with zero cases."""
+    """A floor's sweep read for drained piles, per h/d band (issue 36).
+
+    Per band: cases, finished, flagged; of the flagged, those whose pile ran down (less than
+    `min_heap_h2` h^2 ahead of the blade at the window's end, or no heap measured) and those whose
+    flow was unsteady with the heap full; spheres rolled off the floor's ends (median, max, median
+    share of the case's spheres); the heap at the window's end in h^2 (min, median); median MFR of
+    the usable cases. Rows of every band, empty ones with zero cases.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        A cases table (results table): ``h_um``, ``d_um``, ``status``, ``flagged``,
+        ``heap_end_h2``, ``rolled_off_particles``, ``n_particles``, ``mfr``.
+    min_heap_h2 : float
+        The run-down bound [h^2] (config ``stability.min_heap_h2``).
+    edges : sequence of float, optional
+        The band edges in h/d [-]; a band holds ``from <= h/d < below``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per band: ``h_over_d_from``, ``h_over_d_below``, ``cases``, ``finished`` (status
+        ok), ``flagged`` (of the finished), ``flagged_ran_down``, ``flagged_unsteady_heap_full``,
+        ``rolled_off_median``, ``rolled_off_max``, ``rolled_off_share_median``, ``heap_end_h2_min``,
+        ``heap_end_h2_median`` [h^2] and ``mfr_median`` (of the usable cases: finished, not
+        flagged); NaN where no case counts.
+    """
     hd = pd.Series(h_over_d(cases), index=cases.index)
     rows = []
     for lo, hi in zip(edges[:-1], edges[1:]):

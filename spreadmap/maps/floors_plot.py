@@ -14,9 +14,31 @@ from .style import HATCH, SHORT  # noqa: E402
 
 
 def plot_ratio_box(table: pd.DataFrame, targets, stem, names: tuple[str, str], hollow_d: float | None = None) -> dict:
-    """Per target a panel: each box point's ratio (median, 95 % interval) against h/d, coloured by f;
-    points where the ratio is not defined (floor B may read nothing) marked on the top edge. With
-    ``hollow_d`` the ratio the effective gap alone would give, (h/d + hollow_d) / (h/d)."""
+    """Per target a panel: each box point's ratio (median, 95 % interval) against h/d, coloured by f.
+
+    Points where the ratio is not defined (floor B may read nothing) are marked on the top edge.
+    With ``hollow_d`` the ratio the effective gap alone would give, (h/d + hollow_d) / (h/d), is
+    drawn too.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``spreadmap.maps.floors.compare``'s table over the box (also the CSV saved).
+    targets : sequence of str
+        The targets, one panel each.
+    stem : pathlib.Path or str
+        Where to save: ``<stem>.png``, ``.pdf`` and ``.csv``.
+    names : tuple of (str, str)
+        The names of floor A and floor B, for the labels.
+    hollow_d : float or None, optional
+        Floor A's mean hollow depth [d] (``spreadmap.case.substrate.mean_hollow_depth``); None: no
+        effective-gap curve.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     fig, axes = plt.subplots(1, len(targets), figsize=(5.2 * len(targets), 4.2), squeeze=False)
     hd = np.linspace(table["h_over_d"].min(), table["h_over_d"].max(), 200)
     for ax, t in zip(axes[0], targets):
@@ -49,9 +71,29 @@ def plot_ratio_box(table: pd.DataFrame, targets, stem, names: tuple[str, str], h
 
 
 def plot_side_by_side(grid: pd.DataFrame, targets, stem, names: tuple[str, str], fixed: str) -> dict:
-    """Rows: targets; columns: the target on floor A, on floor B (same colour scale) and A / B, over a
-    (d, h) plane of ``grid`` (the other two parameters fixed, named in ``fixed``). The ratio is
-    hatched where it is not defined or its 95 % interval holds 1."""
+    """Rows: targets; columns: the target on floor A, on floor B (same colour scale) and A / B.
+
+    Over a (d, h) plane of ``grid`` (the other two parameters fixed, named in ``fixed``). The ratio
+    is hatched where it is not defined or its 95 % interval holds 1.
+
+    Parameters
+    ----------
+    grid : pandas.DataFrame
+        ``spreadmap.maps.floors.compare``'s table over a (d, h) grid (also the CSV saved).
+    targets : sequence of str
+        The targets, one row of panels each.
+    stem : pathlib.Path or str
+        Where to save: ``<stem>.png``, ``.pdf`` and ``.csv``.
+    names : tuple of (str, str)
+        The names of floor A and floor B, for the titles.
+    fixed : str
+        The fixed parameters in words, for the title (e.g. "f = 0.3, v = 10 mm/s").
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     d = np.sort(grid["d_um"].unique())
     h = np.sort(grid["h_um"].unique())
 

@@ -13,6 +13,29 @@ def end_label(ax, xs, ys, text, colour="black", at: str = "end", fontsize: float
     already placed is pushed further out along the line (then sideways) until it is free,
     and joined to its line end by a thin leader.  Call after the axes' size and limits are
     final (colour bars added, limits set).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    xs, ys : array_like
+        The polyline's points, in data units.
+    text : str
+        The label.
+    colour : color, optional
+        The text's colour (matplotlib colour).
+    at : {"end", "start"}, optional
+        Which end of the line to label.
+    fontsize : float, optional
+        Font size [pt].
+    distance : float, optional
+        The label's offset from the line end [pt], before any push.
+    edge : color or None, optional
+        The colour of the label box's edge and of the leader; None: no edge, the leader in
+        ``colour``.
+    placed : list or None, optional
+        The bounding boxes (display units) of the labels placed so far on these axes; this label's
+        box is appended. None: no check for overlaps.
     """
     xs = np.asarray(xs, float)
     ys = np.asarray(ys, float)
@@ -82,8 +105,25 @@ def spread(values: np.ndarray, gap: float, low: float, high: float) -> np.ndarra
 
 
 def right_labels(ax, x_end: float, ys, texts, colours, fontsize: float = 8) -> None:
-    """Label curves at their right end x_end, labels spread vertically so they never overlap,
-    each joined to its curve end by a thin leader.  Call after the y limits are final."""
+    """Label curves at their right end x_end, labels spread vertically so they never overlap.
+
+    Each label is joined to its curve end by a thin leader.  Call after the y limits are final.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes.
+    x_end : float
+        The curves' right end, in data units.
+    ys : array_like
+        Each curve's value at ``x_end``, in data units.
+    texts : sequence of str
+        The labels, one per curve.
+    colours : sequence of color
+        The labels' colours, one per curve.
+    fontsize : float, optional
+        Font size [pt]; the labels' spacing grows with it.
+    """
     y0, y1 = ax.get_ylim()
     x0, x1 = ax.get_xlim()
     gap = 0.055 * (y1 - y0) * fontsize / 8
@@ -97,8 +137,22 @@ def right_labels(ax, x_end: float, ys, texts, colours, fontsize: float = 8) -> N
 
 
 def which_labelled(n: int, max_labels: int) -> set[int]:
-    """Indices of the lines that get a label: all if few, else every k-th from the first, and
-    the last, with k the smallest step that keeps the count within ``max_labels``."""
+    """Indices of the lines that get a label: all if few, else every k-th from the first, and the last.
+
+    k is the smallest step that keeps the count within ``max_labels``.
+
+    Parameters
+    ----------
+    n : int
+        How many lines.
+    max_labels : int
+        How many labels at most (the last line's label may add one).
+
+    Returns
+    -------
+    set of int
+        The indices of the lines to label.
+    """
     if n <= max_labels:
         return set(range(n))
     step = int(np.ceil((n - 1) / max(max_labels - 1, 1)))

@@ -28,6 +28,56 @@ def machine_map(model, stem, y: str = "pd", f: float = MACHINE["f"], d_um: float
                 n_h: int = MACHINE["n_h"], n_v: int = MACHINE["n_v"],
                 h_values=None, v_values=None, ranges=None, support=None, max_labels: int = 7,
                 y_note: str | None = None, floor: str | None = None) -> MapResult:
+    """Machine map: MFR (x) against a layer-quality measure y over a grid of h and v, at fixed powder (f, d).
+
+    The grid is evaluated on the surrogate (``grids.evaluate``) and drawn as the module docstring
+    says: a line per blade speed, dashed lines of constant h, an ellipse of one model SD around every
+    setting, a cross of one DEM run's noise SD, settings beyond the data open and the cells they
+    touch hatched.
+
+    Parameters
+    ----------
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate (``load_model``); it must model ``mfr`` and ``y``.
+    stem : pathlib.Path or str
+        Where to save: ``<stem>.png``, ``.pdf`` and ``.csv``.
+    y : str, optional
+        The target on the y axis (a layer-quality target or ``pd``).
+    f : float, optional
+        Friction coefficient [-]; default: the schema's ``maps.machine.f``.
+    d_um : float, optional
+        Particle diameter [um]; default: the schema's ``maps.machine.d_um``.
+    n_h, n_v : int, optional
+        Grid sizes of the layer thickness h and the blade speed v, each spanning its range (ends
+        included; at least 2); default: the schema's ``maps.machine``.
+    h_values : array_like or None, optional
+        Explicit h values [um] instead of ``n_h`` (sorted); None: ``n_h`` over the range.
+    v_values : array_like or None, optional
+        Explicit v values [mm/s] instead of ``n_v`` (sorted); None: ``n_v`` over the range.
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+    support : dict or None, optional
+        The config's ``maps.support`` (``max_distance``, ``max_sd_ratio``); None: the schema's.
+    max_labels : int, optional
+        How many v lines and how many h lines get a label at most (``labels.which_labelled``).
+    y_note : str or None, optional
+        A note on y written in the axes' corner (how far it is from MFR in disguise); None: none.
+    floor : str or None, optional
+        The floor the cases ran on (``spreadmap.case.substrate.floor_label``), named on the figure
+        and in the CSV.
+
+    Returns
+    -------
+    MapResult
+        ``paths`` (``png``, ``pdf``, ``csv``), ``data``: the evaluated grid (h varying slowest,
+        then v), and ``info``: ``y``, ``note`` (the support note), ``title`` and
+        ``n_unsupported`` (settings beyond the data).
+
+    Raises
+    ------
+    ValueError
+        If explicit h or v values are empty, or a grid size is below 2 (``grids.values``).
+    """
     support = support or grids.MAP_DEFAULTS["support"]
     h = grids.values(h_values, n_h, "h_um", ranges)
     v = grids.values(v_values, n_v, "v_mm_s", ranges)

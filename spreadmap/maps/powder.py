@@ -34,6 +34,57 @@ EFFECT = ("change", "change_low", "change_high", "p_increase")  # grids.f_effect
 def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"], n_d: int = 41,
                     n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
                     seed: int = 0, floor: str | None = None) -> MapResult:
+    """Powder map (a): MFR and y against d, one curve per friction value, at fixed machine settings (h, v).
+
+    The lowest and the highest friction are drawn with their 95 % bands of the mean (model SD),
+    stretches beyond the data dotted and hatched; below each panel, the change from the lowest to
+    the highest friction with its 95 % interval from joint draws (see the module docstring). The
+    numbers come from ``powder_band_grid``, the figure from ``draw_powder_band_map``.
+
+    Parameters
+    ----------
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate (``load_model``); it must model ``mfr`` and ``y``.
+    stem : pathlib.Path or str
+        Where to save: ``<stem>.png``, ``.pdf`` and ``.csv``.
+    y : str, optional
+        The second target drawn beside MFR.
+    h_um : float, optional
+        Layer thickness (gap) h [um]; default: the schema's ``maps.powder.h_um``.
+    v_mm_s : float, optional
+        Blade speed v [mm/s]; default: the schema's ``maps.powder.v_mm_s``.
+    n_d, n_f : int, optional
+        Grid sizes of the diameter d and the friction f, each spanning its range (ends included; at
+        least 2).
+    d_values : array_like or None, optional
+        Explicit d values [um] instead of ``n_d`` (sorted); None: ``n_d`` over the range.
+    f_values : array_like or None, optional
+        Explicit f values [-] instead of ``n_f`` (sorted); None: ``n_f`` over the range.
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+    support : dict or None, optional
+        The config's ``maps.support`` (``max_distance``, ``max_sd_ratio``); None: the schema's.
+    draws : int, optional
+        Joint draws of the mean function for the friction effect's interval (``grids.f_effect``).
+    seed : int, optional
+        Seed of those draws.
+    floor : str or None, optional
+        The floor the cases ran on (``spreadmap.case.substrate.floor_label``), named on the figure
+        and in the CSV.
+
+    Returns
+    -------
+    MapResult
+        ``paths`` (``png``, ``pdf``, ``csv``), ``data``: ``powder_band_grid``'s table (f varying
+        slowest; per row the change of MFR and y from the lowest to the highest f at its d:
+        ``<t>_change``, ``_change_low``, ``_change_high``, ``_p_increase``), and ``info``: ``note``
+        (the support note) and ``effect`` (the change per d).
+
+    Raises
+    ------
+    ValueError
+        If explicit d or f values are empty, or a grid size is below 2 (``grids.values``).
+    """
     support = support or DEFAULT_SUPPORT
     table = powder_band_grid(model, y, h_um, v_mm_s, n_d, n_f, d_values, f_values, ranges, support, draws, seed)
     return draw_powder_band_map(table, stem, y, support, floor)
@@ -114,6 +165,49 @@ def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor
 def powder_cluster_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"], n_d: int = 5,
                        n_f: int = 7, d_values=None, f_values=None, ranges=None, support=None,
                        floor: str | None = None) -> MapResult:
+    """Powder map (b): in the MFR-y plane, one cluster of points per diameter, its points the friction values.
+
+    Each point has a cross of one model SD; points beyond the data are open. The numbers come from
+    ``powder_cluster_grid``, the figure from ``draw_powder_cluster_map``.
+
+    Parameters
+    ----------
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate (``load_model``); it must model ``mfr`` and ``y``.
+    stem : pathlib.Path or str
+        Where to save: ``<stem>.png``, ``.pdf`` and ``.csv``.
+    y : str, optional
+        The target on the y axis.
+    h_um : float, optional
+        Layer thickness (gap) h [um]; default: the schema's ``maps.powder.h_um``.
+    v_mm_s : float, optional
+        Blade speed v [mm/s]; default: the schema's ``maps.powder.v_mm_s``.
+    n_d, n_f : int, optional
+        Grid sizes of the diameter d (the clusters) and the friction f (the points of a cluster),
+        each spanning its range (ends included; at least 2).
+    d_values : array_like or None, optional
+        Explicit d values [um] instead of ``n_d`` (sorted); None: ``n_d`` over the range.
+    f_values : array_like or None, optional
+        Explicit f values [-] instead of ``n_f`` (sorted); None: ``n_f`` over the range.
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+    support : dict or None, optional
+        The config's ``maps.support`` (``max_distance``, ``max_sd_ratio``); None: the schema's.
+    floor : str or None, optional
+        The floor the cases ran on (``spreadmap.case.substrate.floor_label``), named on the figure
+        and in the CSV.
+
+    Returns
+    -------
+    MapResult
+        ``paths`` (``png``, ``pdf``, ``csv``), ``data``: the evaluated (f, d) grid at (h, v), f
+        varying slowest (``grids.evaluate``), and ``info``: ``note`` (the support note).
+
+    Raises
+    ------
+    ValueError
+        If explicit d or f values are empty, or a grid size is below 2 (``grids.values``).
+    """
     support = support or DEFAULT_SUPPORT
     grid = powder_cluster_grid(model, y, h_um, v_mm_s, n_d, n_f, d_values, f_values, ranges, support)
     return draw_powder_cluster_map(grid, stem, y, support, floor)

@@ -52,8 +52,53 @@ def regime_counts(dem: np.ndarray, model: np.ndarray) -> pd.DataFrame:
 def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
                    f: float = PLANE["f"], v_mm_s: float = PLANE["v_mm_s"], n_d: int = 60, n_h: int = 40, ranges=None,
                    support=None, floor: str | None = None) -> MapResult:
-    """The figure (``stem``.png/.pdf, the cases' table as ``stem``.csv) and the plane's numbers
-    beside it (``stem``_plane.csv)."""
+    """The regime figure and the plane's numbers beside it.
+
+    The figure (``stem``.png/.pdf, the cases' table as ``stem``.csv): left, the cases in the
+    (h/d, v) plane by DEM regime; right, the most probable regime of a new run over the (d, h) plane
+    at (f, v) with probability contours (see the module docstring). The plane's numbers are written
+    beside it (``stem``_plane.csv: ``PLANE_COLUMNS``, and ``floor`` when given). The numbers come
+    from ``regime_tables``, the figure from ``draw_regime_overlay``.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        The results table (physical units, NAMES; ``regime``, ``mfr``, ``pd``); cases whose regime
+        is not one of ``REGIMES`` are left out and counted in the title.
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate; it must model ``mfr``, ``coverage`` and ``thickness_ratio``.
+    stem : pathlib.Path or str
+        Where to save the figure and its CSVs.
+    rules : dict
+        The config's ``regime`` section: ``jam_mfr_max``, ``short_feed_coverage_min``,
+        ``short_feed_thickness_min`` (``metrics.classify``'s thresholds).
+    f : float, optional
+        Friction coefficient [-] of the plane; default: the schema's ``maps.regime_plane.f``.
+    v_mm_s : float, optional
+        Blade speed [mm/s] of the plane; default: the schema's ``maps.regime_plane.v_mm_s``.
+    n_d, n_h : int, optional
+        Grid sizes of d and h over their ranges (ends included; at least 2).
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+    support : dict or None, optional
+        The config's ``maps.support`` (``max_distance``, ``max_sd_ratio``); None: the schema's.
+    floor : str or None, optional
+        The floor the cases ran on (``spreadmap.case.substrate.floor_label``), named on the figure
+        and in both CSVs.
+
+    Returns
+    -------
+    MapResult
+        ``paths`` (``png``, ``pdf``, ``csv`` and ``plane``), ``data``: the cases with a DEM regime
+        (their h/d, regime probabilities at their own settings and most probable regime), and
+        ``info``: ``counts`` (per regime: cases by the DEM, by the surrogate, by both), ``excluded``,
+        ``agree``, ``plane`` (the plane's table) and ``note`` (the support note).
+
+    Raises
+    ------
+    ValueError
+        If the surrogate lacks a target the regime rule reads, or a grid size is below 2.
+    """
     support = support or grids.MAP_DEFAULTS["support"]
     table, plane = regime_tables(cases, model, rules, f, v_mm_s, n_d, n_h, ranges, support)
     excluded = len(cases) - len(table)

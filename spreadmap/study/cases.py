@@ -31,10 +31,37 @@ class PlannedCase(NamedTuple):
 
 
 def planned_cases(config: dict, lds_points: int = 0, scene_sha256: str | None = None) -> Iterator[PlannedCase]:
-    """The cases of the config's sweeps in the workflow's order: the LDS sequence up to the larger of
-    its sweep and `lds_points` (the workflow's converge.budget), then the lattices by increasing k
-    (a case shared by two lattices comes under each). Case ids are those of the scene template
-    whose hash is scene_sha256 (default: the shipped template's)."""
+    """The cases of the config's sweeps in the workflow's order.
+
+    The LDS sequence up to the larger of its sweep and `lds_points` (the workflow's
+    converge.budget), then the lattices by increasing k (a case shared by two lattices comes under
+    each). Case ids are those of the scene template whose hash is scene_sha256 (default: the shipped
+    template's).
+
+    Parameters
+    ----------
+    config : dict
+        The loaded configuration: ``sweeps`` (``lds``: ``partitions``, ``seed``, optional
+        ``preset``; ``lattice``: ``k``, optional ``preset``), ``ranges``, ``preset``, ``scene.seed``
+        and all a case id needs (``spreadmap.case.identity.case_id``).
+    lds_points : int, optional
+        LDS points to plan at least (the converge budget); those past the sweep's largest
+        partition have ``in_sweep`` False.
+    scene_sha256 : str or None, optional
+        The hash of the scene template; None: that of the shipped template.
+
+    Yields
+    ------
+    PlannedCase
+        ``sweep`` ("lds" or "lattice"), ``point`` (the design point, physical units, with its
+        ``index``), ``preset`` (None: the config's), ``label`` (``index``; for a lattice also ``k``
+        and ``index_in_lattice``), ``case_id`` and ``in_sweep``.
+
+    Raises
+    ------
+    spreadmap.case.scene.UnsafeTimeStep, ValueError
+        For a case that must not run (``spreadmap.case.identity.case_scene``).
+    """
     sweeps = config.get("sweeps") or {}
     space, seed = Design.from_config(config), config["scene"]["seed"]
     sha = template_sha256() if scene_sha256 is None else scene_sha256
@@ -52,8 +79,21 @@ def planned_cases(config: dict, lds_points: int = 0, scene_sha256: str | None = 
 
 
 def planned_sweeps(config: dict, scene_sha256: str | None = None) -> dict[str, list[tuple[str, dict]]]:
-    """{"lds": [(case id, label)], "lattice": [...]} for the sweeps the config has, with the labels
-    of the workflow's tables (ids for the template of hash scene_sha256; default: the shipped one)."""
+    """The planned cases of each sweep the config has, with the labels of the workflow's tables.
+
+    Parameters
+    ----------
+    config : dict
+        The loaded configuration (``planned_cases``).
+    scene_sha256 : str or None, optional
+        The hash of the scene template the ids are for; None: that of the shipped template.
+
+    Returns
+    -------
+    dict of str to list of (str, dict)
+        ``{"lds": [(case id, label)], "lattice": [...]}`` for the sweeps the config has, each label
+        with its ``sweep``; the LDS planned up to its sweep's largest partition.
+    """
     plan = {name: [] for name in ("lds", "lattice") if name in (config.get("sweeps") or {})}
     for case in planned_cases(config, scene_sha256=scene_sha256):
         plan[case.sweep].append((case.case_id, {"sweep": case.sweep, **case.label}))
@@ -61,9 +101,28 @@ def planned_sweeps(config: dict, scene_sha256: str | None = None) -> dict[str, l
 
 
 def loop_cases(config: dict, steps: list[dict], scene_sha256: str | None = None) -> list[tuple[str, dict]]:
-    """The main job's loop so far as (case id, label), in run order, from its step records (the
-    converge checkpoints, ordered by n): the LDS start, then each step's next batch; labels as the
-    workflow's converge table (`sweep` converge, `index`, `batch`, `lds`)."""
+    """The main job's loop so far as (case id, label), in run order, from its step records.
+
+    The step records are the converge checkpoints, ordered by n: the LDS start, then each step's
+    next batch; labels as the workflow's converge table (`sweep` converge, `index`, `batch`, `lds`).
+
+    Parameters
+    ----------
+    config : dict
+        The loaded configuration: ``converge.start`` and ``converge.batch``, the LDS sweep's preset
+        (else ``preset``), ``scene.seed`` and all a case id needs.
+    steps : list of dict
+        The loop's step records (converge/steps/step_N.json): ``n``, ``next_batch`` (design
+        points, physical units) and ``is_lds`` (per case so far, in run order); any order.
+    scene_sha256 : str or None, optional
+        The hash of the scene template the ids are for; None: that of the shipped template.
+
+    Returns
+    -------
+    list of (str, dict)
+        (case id, label) per case in run order (``loop_labels``); without steps, the LDS start
+        alone.
+    """
     start, batch = int(config["converge"]["start"]), int(config["converge"]["batch"])  # a loaded config: filled
     preset = ((config.get("sweeps") or {}).get("lds") or {}).get("preset") or config["preset"]
     seed, sha = config["scene"]["seed"], template_sha256() if scene_sha256 is None else scene_sha256
@@ -75,16 +134,52 @@ def loop_cases(config: dict, steps: list[dict], scene_sha256: str | None = None)
 
 
 def loop_labels(is_lds: list[bool], start: int, batch: int) -> list[dict]:
-    """The labels of the loop's cases in run order in its table (the workflow's converge table and
-    the study's): `sweep` converge, `index`, `batch` (0 for the LDS start, then 1, 2, ...) and `lds`
-    (the LDS start and each batch's LDS share, or an active case)."""
+    """The labels of the loop's cases in run order in its table (the workflow's converge table and the study's).
+
+    `sweep` converge, `index`, `batch` (0 for the LDS start, then 1, 2, ...) and `lds` (the LDS
+    start and each batch's LDS share, or an active case).
+
+    Parameters
+    ----------
+    is_lds : list of bool
+        Per case in run order, whether it is an LDS case.
+    start : int
+        Cases in the LDS start (config ``converge.start``).
+    batch : int
+        Cases per batch after it (config ``converge.batch``).
+
+    Returns
+    -------
+    list of dict
+        One label per case: ``sweep``, ``index``, ``batch`` and ``lds``.
+    """
     return [{"sweep": "converge", "index": i, "batch": 0 if i < start else 1 + (i - start) // batch, "lds": bool(lds)}
             for i, lds in enumerate(is_lds)]
 
 
 def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.DataFrame:
-    """The results table of the planned cases whose metrics exist in workdir/results/cases, in plan
-    order (a case shared by two lattices appears under each of its labels, as in the workflow)."""
+    """The results table of the planned cases whose metrics exist in workdir/results/cases, in plan order.
+
+    A case shared by two lattices appears under each of its labels, as in the workflow.
+
+    Parameters
+    ----------
+    workdir : pathlib.Path or str
+        The workflow directory.
+    planned : list of (str, dict)
+        (case id, label) in plan order (``planned_sweeps``' list of one sweep, or ``loop_cases``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``spreadmap.table.build_table`` of the finished cases' metrics.json and benchmark.tsv, with
+        their labels.
+
+    Raises
+    ------
+    spreadmap.records.CorruptFileError
+        If a finished case's metrics.json is not a whole metrics record.
+    """
     cases = Path(workdir) / "results" / "cases"
     done = [(cid, label) for cid, label in planned if (cases / cid / "metrics.json").exists()]
     return build_table([cases / cid / "metrics.json" for cid, _ in done],
@@ -92,9 +187,28 @@ def finished_table(workdir: Path | str, planned: list[tuple[str, dict]]) -> pd.D
 
 
 def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame], scene_sha256: str | None = None) -> dict[str, float]:
-    """Per sweep: the predicted CPU hours of its planned cases not yet finished, from the planned-cost
-    law (spreadmap.loop.cost) calibrated to the finished cases' measured CPU (this machine's
-    speed); a case shared by two sweeps counts in each."""
+    """Per sweep: the predicted CPU hours of its planned cases not yet finished.
+
+    From the planned-cost law (spreadmap.loop.cost) calibrated to the finished cases' measured CPU
+    (this machine's speed); a case shared by two sweeps counts in each. A table published before
+    content keys names its cases by their readable part: a planned case of that readable part counts
+    as finished.
+
+    Parameters
+    ----------
+    config : dict
+        The loaded configuration (the plan, ``planned_cases``, and the cost law,
+        ``PlannedCost.from_config``).
+    tables : dict of str to pandas.DataFrame
+        Per sweep, its finished cases' table (``case_id``, the design point and ``cpu_time`` [s]).
+    scene_sha256 : str or None, optional
+        The hash of the scene template the ids are for; None: that of the shipped template.
+
+    Returns
+    -------
+    dict of str to float
+        Per sweep of ``tables``: the CPU hours [h] of its planned cases still to run (0.0 if none).
+    """
     nonempty = [t for t in tables.values() if len(t)]
     finished = pd.concat(nonempty, ignore_index=True) if nonempty else pd.DataFrame()
     done = set(finished["case_id"]) if "case_id" in finished else set()
@@ -118,8 +232,27 @@ def cpu_hours_to_go(config: dict, tables: dict[str, pd.DataFrame], scene_sha256:
 
 def progress(planned: dict[str, list[tuple[str, dict]]], tables: dict[str, pd.DataFrame],
              to_go: dict[str, float] | None = None) -> pd.DataFrame:
-    """Per sweep: cases planned, finished, usable-status counts and their CPU hours (and, given
-    ``to_go`` from cpu_hours_to_go, the predicted CPU hours of the rest)."""
+    """Per sweep: cases planned, finished, usable-status counts and their CPU hours.
+
+    Given ``to_go`` from cpu_hours_to_go, also the predicted CPU hours of the rest. A case shared by
+    two lattices ran once and counts once.
+
+    Parameters
+    ----------
+    planned : dict of str to list of (str, dict)
+        Per sweep, its planned (case id, label) (``planned_sweeps``).
+    tables : dict of str to pandas.DataFrame
+        Per sweep, its finished cases' table (``finished_table``).
+    to_go : dict of str to float or None, optional
+        Per sweep, the CPU hours still to run (``cpu_hours_to_go``); None: no such column.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per sweep: ``sweep``, ``planned``, ``finished``, ``ok``, ``failed`` (finished, status
+        not ok), ``cpu_hours`` [h] (of the finished cases, 3 decimals) and, with ``to_go``,
+        ``cpu_hours_to_go`` [h] (1 decimal).
+    """
     rows = []
     for name, plan in planned.items():
         table = tables[name]

@@ -39,6 +39,18 @@ class PublishedFileError(ValueError):
 
 
 def sha256(data: bytes) -> str:
+    """The SHA-256 of some bytes, as hex.
+
+    Parameters
+    ----------
+    data : bytes
+        The bytes (a file's content).
+
+    Returns
+    -------
+    str
+        64 lowercase hex digits, as ``sha256sum`` writes them.
+    """
     return hashlib.sha256(data).hexdigest()
 
 
@@ -54,7 +66,21 @@ def patterns_for(folder: Path | str) -> tuple[str, ...]:
 
 
 def listed_files(folder: Path | str, patterns=None) -> list[str]:
-    """The files of `folder` its manifest lists: relative POSIX paths, sorted."""
+    """The files of `folder` its manifest lists: relative POSIX paths, sorted.
+
+    Parameters
+    ----------
+    folder : pathlib.Path or str
+        The published folder.
+    patterns : sequence of str or None, optional
+        Glob patterns relative to the folder; None: the folder's own (this repository's list for its
+        published folders, ``STUDY_PATTERNS`` for any other).
+
+    Returns
+    -------
+    list of str
+        The files (not folders) the patterns match, relative to the folder, sorted.
+    """
     folder = Path(folder)
     found = {p.relative_to(folder).as_posix() for pattern in (patterns or patterns_for(folder))
              for p in folder.glob(pattern) if p.is_file()}
@@ -67,7 +93,20 @@ def manifest_text(folder: Path | str, patterns=None) -> str:
 
 
 def write_manifest(folder: Path | str, patterns=None) -> Path:
-    """(Re-)make folder/SHA256SUMS from the files as they are now; returns its path."""
+    """(Re-)make folder/SHA256SUMS from the files as they are now; returns its path.
+
+    Parameters
+    ----------
+    folder : pathlib.Path or str
+        The published folder.
+    patterns : sequence of str or None, optional
+        What the manifest lists (``listed_files``); None: the folder's own patterns.
+
+    Returns
+    -------
+    pathlib.Path
+        The manifest, written atomically: one ``<sha256>  <path>`` line per file listed.
+    """
     path = Path(folder) / MANIFEST
     write_text_atomically(path, manifest_text(folder, patterns))
     return path
@@ -95,9 +134,33 @@ def find_manifest(path: Path | str) -> Path | None:
 
 
 def verified_bytes(path: Path | str, required: bool = True) -> bytes:
-    """The bytes of a published file, after checking them against its manifest. A file no
+    """The bytes of a published file, after checking them against its manifest.
+
+    The manifest is SHA256SUMS in the file's folder or the nearest folder above it. A file no
     manifest lists is refused when `required` (a restore), read as it is otherwise (a resume from a
-    CSV that was never published)."""
+    CSV that was never published).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The published file.
+    required : bool, optional
+        True: a file without a manifest, or not listed in it, is refused.
+
+    Returns
+    -------
+    bytes
+        The file's content.
+
+    Raises
+    ------
+    PublishedFileError
+        If the file does not match its listed checksum, its manifest has a malformed line, or
+        (when `required`) no manifest lists it; the message says how to get the file back or
+        re-publish the checksums.
+    FileNotFoundError
+        If the file is missing.
+    """
     path = Path(path)
     data = path.read_bytes()
     manifest = find_manifest(path)
@@ -125,8 +188,23 @@ def verified_bytes(path: Path | str, required: bool = True) -> bytes:
 
 
 def check_folder(folder: Path | str, patterns=None) -> list[str]:
-    """What is wrong with a published folder's manifest: one line per file that differs from it,
-    is listed but gone, or should be listed and is not; [] when it holds."""
+    """What is wrong with a published folder's manifest; [] when it holds.
+
+    One line per file that differs from it, is listed but gone, or should be listed and is not; one
+    line alone when the manifest is missing or malformed.
+
+    Parameters
+    ----------
+    folder : pathlib.Path or str
+        The published folder.
+    patterns : sequence of str or None, optional
+        What the manifest should list (``listed_files``); None: the folder's own patterns.
+
+    Returns
+    -------
+    list of str
+        The problems, each naming the file; [] when the manifest holds.
+    """
     folder = Path(folder)
     manifest = folder / MANIFEST
     if not manifest.is_file():
@@ -146,7 +224,24 @@ def check_folder(folder: Path | str, patterns=None) -> list[str]:
 
 
 def republish_if_listed(path: Path | str) -> Path | None:
-    """After a tool rewrote a published file: re-make the manifest that lists it (none: nothing)."""
+    """After a tool rewrote a published file: re-make the manifest that lists it (none: nothing).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The file rewritten.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The manifest re-made (``write_manifest`` of its folder); None when no manifest covers the
+        file or it does not list it.
+
+    Raises
+    ------
+    PublishedFileError
+        If the manifest covering the file has a malformed line.
+    """
     manifest = find_manifest(path)
     if manifest is None:
         return None

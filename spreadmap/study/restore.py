@@ -100,12 +100,40 @@ def readable_metrics(path: Path) -> bool:
 
 
 def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -> dict:
-    """Write metrics.json, benchmark.tsv and restored.json of every case of the published tables
-    under workdir/results/cases/<case_id>/ (a case in two tables once, from the first). Cases with a
+    """Write metrics.json, benchmark.tsv and restored.json of every case of the published tables.
+
+    Under workdir/results/cases/<case_id>/ (a case in two tables once, from the first). Cases with a
     raw record are skipped, and so are cases that did not finish (status other than ok: failed,
     refused, ...), which the workflow then runs again, and cases restored before (so that running
     the tool again after a table has grown adds the new cases and leaves the rest, and their
-    steps, up to date). Returns counts."""
+    steps, up to date). Every table is checked (its published checksum, its case ids) before any
+    case is restored.
+
+    Parameters
+    ----------
+    tables : list of pathlib.Path or str
+        The published cases tables (docs/study/cases_*.csv), each listed in its folder's SHA256SUMS.
+    workdir : pathlib.Path or str
+        The workflow directory restored into.
+    mtime : float
+        The modification time [s since the epoch] given to every file restored.
+
+    Returns
+    -------
+    dict
+        Counts: ``restored``, ``kept_real`` (a raw record there), ``duplicates`` (a case of an
+        earlier table), ``not_finished`` and ``already`` (restored before).
+
+    Raises
+    ------
+    spreadmap.study.checksums.PublishedFileError
+        If a table does not match its published checksum or no manifest lists it.
+    UnkeyedTableError
+        If a table's case ids have no content key or do not name the row's own preset, design
+        point and seed.
+    ValueError
+        If a table has no ``case_id`` column.
+    """
     workdir = Path(workdir)
     counts = {"restored": 0, "kept_real": 0, "duplicates": 0, "not_finished": 0, "already": 0}
     seen = set()
@@ -153,8 +181,30 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
 
 
 def restore_steps(steps: list[Path | str], workdir: Path | str, mtime: float) -> list[str]:
-    """Copy the loop's step records to workdir/results/converge/, each a second newer than the one
-    before it (and than the cases, restored at `mtime`). An existing step is left alone."""
+    """Copy the loop's step records to workdir/results/converge/, each a second newer than the one before it.
+
+    And newer than the cases, restored at `mtime`. An existing step is left alone. Every record is
+    checked against its published checksum before any is copied.
+
+    Parameters
+    ----------
+    steps : list of pathlib.Path or str
+        The published step records (converge/steps/step_N.json).
+    workdir : pathlib.Path or str
+        The workflow directory restored into.
+    mtime : float
+        The cases' modification time [s since the epoch]; the k-th step by n gets mtime + k.
+
+    Returns
+    -------
+    list of str
+        The names of the step records written.
+
+    Raises
+    ------
+    spreadmap.study.checksums.PublishedFileError
+        If a record does not match its published checksum or no manifest lists it.
+    """
     out = []
     texts = {path: verified_bytes(path).decode() for path in steps}  # all checked before any is restored
     for k, path in enumerate(sorted(steps, key=step_number), start=1):

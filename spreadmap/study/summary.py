@@ -313,10 +313,27 @@ def _ranking(study: Path) -> list[str]:
 
 
 def trends(study: Path | str, ranges: dict | None = None) -> dict[str, pd.DataFrame]:
-    """The study's trends: the partial dependence (``main_effect``) of every target of its surrogate
+    """The study's trends: the partial dependence of every target of its surrogate, by variable.
+
+    The partial dependence (``main_effect``) of every target of the study's surrogate
     (surrogate/model.joblib) on blade speed and friction (5 levels each over their ranges) and on
-    h/d (6 levels, geometric, over what the ranges allow), by variable; empty before the surrogate
-    exists. tools/publish_study.py writes each as trend_<variable>.csv."""
+    h/d (6 levels, geometric, over what the ranges allow); empty before the surrogate exists.
+    tools/publish_study.py writes each as trend_<variable>.csv.
+
+    Parameters
+    ----------
+    study : pathlib.Path or str
+        The study folder (docs/study).
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+
+    Returns
+    -------
+    dict of str to pandas.DataFrame
+        ``v_mm_s``, ``f`` and ``h_over_d`` -> ``main_effect``'s table: ``variable``, ``level``,
+        ``n_points`` and per target its mean with ``_low`` and ``_high`` (95 % band); {} without
+        the surrogate.
+    """
     path = Path(study) / "surrogate" / "model.joblib"
     if not path.exists():
         return {}
@@ -402,7 +419,23 @@ def _flag_causes(marked: pd.DataFrame) -> str:
 
 
 def summary_markdown(study: Path | str, effects: dict[str, pd.DataFrame]) -> str:
-    """summary.md of the study folder's files, its trends section from ``effects`` (``trends``)."""
+    """summary.md of the study folder's files, its trends section from ``effects`` (``trends``).
+
+    Writes no file. A part whose files do not exist yet says "not yet run".
+
+    Parameters
+    ----------
+    study : pathlib.Path or str
+        The study folder (docs/study); see the module docstring for what it reads.
+    effects : dict of str to pandas.DataFrame
+        The trends (``trends``); {}: the section says "not yet run".
+
+    Returns
+    -------
+    str
+        The Markdown text: a title, the floor (from config.yaml, if there) and one section per
+        question.
+    """
     study = Path(study)
     sections = [_cases(study), _convergence(study), _surrogate(study), _heldout(study), _ranking(study),
                 _trends(effects), _regimes(study)]

@@ -122,8 +122,31 @@ def plot_learning_curve(learning: pd.DataFrame, stem, floor: str | None = None) 
 
 
 def plot_all(result, outdir, prefix: str = "surrogate", floor: str | None = None) -> dict:
-    """The three figures into outdir (the tables they draw from: the caller writes them); with
-    ``floor`` (spreadmap.case.substrate.floor_label) the figures name the floor the cases ran on."""
+    """The three figures of the surrogate's validation into outdir (the tables they draw from: the caller writes them).
+
+    The parity figure (``plot_parity``, from ``validation.parity_table``), the study's protocol
+    (``plot_study``) and the learning curve (``plot_learning_curve``); with ``floor``
+    (spreadmap.case.substrate.floor_label) the figures name the floor the cases ran on.
+
+    Parameters
+    ----------
+    result : spreadmap.surrogate.fitting.SurrogateResult
+        ``fit_surrogate``'s result: its ``validation``, ``oof``, ``study_summary`` and
+        ``learning`` tables are drawn.
+    outdir : pathlib.Path or str
+        The folder of the figures (created if missing).
+    prefix : str, optional
+        The files' name prefix: ``<prefix>_parity``, ``<prefix>_r2_vs_neurons``,
+        ``<prefix>_learning_curve`` (each .png, .pdf and .csv).
+    floor : str or None, optional
+        The floor the cases ran on, named on each figure and in its CSV; None: not named.
+
+    Returns
+    -------
+    dict
+        ``parity``, ``r2_vs_neurons`` and ``learning_curve`` -> the files written for that figure
+        (``png``, ``pdf``, ``csv`` -> pathlib.Path).
+    """
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     return {
@@ -135,11 +158,29 @@ def plot_all(result, outdir, prefix: str = "surrogate", floor: str | None = None
 
 
 def plot_heldout(scores: dict[str, pd.DataFrame], stem, level: float = 0.95) -> dict:
-    """scores: check label -> its score table (tools/heldout.py score's CSV: name, target,
-    predicted, seed_mean, n_runs, sd_of_mean, z, inside; scored at `level`). Each point is drawn
-    at (prediction, seed mean) over a vertical bar, the `level` interval of its seed mean about the
-    prediction (centred on the y = x line), so a point is inside when its marker lies on its bar;
-    points outside are ringed in red. The last panel: every point's z per target and check."""
+    """Held-out checks: each point's seed mean against the prediction made before its runs, and every point's z.
+
+    Each point is drawn at (prediction, seed mean) over a vertical bar, the `level` interval of its
+    seed mean about the prediction (centred on the y = x line), so a point is inside when its marker
+    lies on its bar; points outside are ringed in red. One panel per target, one marker per check;
+    the last panel: every point's z per target and check, with its RMS.
+
+    Parameters
+    ----------
+    scores : dict of str to pandas.DataFrame
+        Check label -> its score table (tools/heldout.py score's CSV: name, target, predicted,
+        seed_mean, n_runs, sd_of_mean, z, inside; scored at `level`).
+    stem : pathlib.Path or str
+        Where to save: ``<stem>.png``, ``.pdf`` and ``.csv`` (the score tables with their
+        ``check``).
+    level : float, optional
+        The level of the intervals the points were scored at, in (0, 1).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
+    """
     frames = [t.assign(check=label) for label, t in scores.items()]
     table = pd.concat(frames, ignore_index=True)
     targets = list(dict.fromkeys(table["target"]))

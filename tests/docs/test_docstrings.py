@@ -1,8 +1,11 @@
 """The public API's docstrings are numpydoc and agree with the signatures (issue 34).
 
 The public API is what the workflow's thin entry points (scripts/*.py, tools/*.py) import from the
-package, listed below by hand: a name that an entry point starts to use is added here with its
-docstring. For each function, class (its constructor's arguments) and public method of a class:
+package; in spreadmap/case, config, files, maps, study, experiments and surrogate/plots also what
+other modules of the package, rules/*.smk and benchmarks/*.py import from them, and the names of a
+module's ``__all__``. It is listed below by hand: a name that starts to be used so is added here
+with its docstring. For each function, class (its constructor's arguments) and public method of a
+class:
 
 * a summary line;
 * section headers that numpydoc knows (a header is a line underlined with dashes);
@@ -12,8 +15,8 @@ docstring. For each function, class (its constructor's arguments) and public met
 * a ``Returns`` (or ``Yields``) section unless the return annotation says None (a callable
   without a return annotation must document what it returns).
 
-Pure Python, no numpydoc needed. Names of the public API that live in modules other work owns
-(spreadmap/case, config, files, maps, study, experiments, surrogate/plots) are not listed yet.
+Pure Python, no numpydoc needed. Not listed yet: spreadmap.maps.grids and spreadmap.maps.parallel,
+whose code other work is changing (see the comment in PUBLIC_API); their docstrings come with it.
 """
 from __future__ import annotations
 
@@ -24,6 +27,44 @@ import re
 import pytest
 
 PUBLIC_API = [
+    ("spreadmap.case.identity", "case_id"),
+    ("spreadmap.case.identity", "case_scene"),
+    ("spreadmap.case.identity", "content_key"),
+    ("spreadmap.case.identity", "is_legacy_id"),
+    ("spreadmap.case.identity", "keyed_id"),
+    ("spreadmap.case.identity", "readable_id"),
+    ("spreadmap.case.identity", "readable_part"),
+    ("spreadmap.case.identity", "repeat_group"),
+    ("spreadmap.case.identity", "rounded"),
+    ("spreadmap.case.launcher", "failure_record"),
+    ("spreadmap.case.launcher", "retry_wanted"),
+    ("spreadmap.case.launcher", "run_case"),
+    ("spreadmap.case.launcher", "simulate"),
+    ("spreadmap.case.launcher", "write_json_atomically"),
+    ("spreadmap.case.migrate", "legacy_case_folders"),
+    ("spreadmap.case.migrate", "migrate_case_folders"),
+    ("spreadmap.case.pictures", "build_case_figure"),
+    ("spreadmap.case.pictures", "choose_moments"),
+    ("spreadmap.case.pictures", "plot_case_views"),
+    ("spreadmap.case.pictures", "sphere_table"),
+    ("spreadmap.case.pictures", "view_window"),
+    ("spreadmap.case.render", "render"),
+    ("spreadmap.case.render", "rendered_params"),
+    ("spreadmap.case.render", "template_sha256"),
+    ("spreadmap.case.scene", "UnsafeTimeStep"),
+    ("spreadmap.case.scene", "precision_target"),
+    ("spreadmap.case.scene", "scene_parameters"),
+    ("spreadmap.case.substrate", "effective_gap_um"),
+    ("spreadmap.case.substrate", "floor_label"),
+    ("spreadmap.case.substrate", "floor_of"),
+    ("spreadmap.case.substrate", "mean_hollow_depth"),
+    ("spreadmap.case.vtk_export", "export_case"),
+    ("spreadmap.case.vtk_export", "write_vtk"),
+    ("spreadmap.config", "ConfigError"),
+    ("spreadmap.config", "checked"),
+    ("spreadmap.config", "load"),
+    ("spreadmap.config", "section_schema"),
+    ("spreadmap.config", "validate"),
     ("spreadmap.decisions", "decision_config"),
     ("spreadmap.decisions", "powders_from_config"),
     ("spreadmap.decisions", "recommendations"),
@@ -32,6 +73,24 @@ PUBLIC_API = [
     ("spreadmap.design", "bounds"),
     ("spreadmap.design", "to_physical"),
     ("spreadmap.design", "to_unit"),
+    ("spreadmap.experiments.cost_study", "cpu_needed"),
+    ("spreadmap.experiments.cost_study", "summarise"),
+    ("spreadmap.experiments.noisy_study", "cases_needed"),
+    ("spreadmap.experiments.noisy_study", "rmse_summary"),
+    ("spreadmap.experiments.noisy_study", "run"),
+    ("spreadmap.experiments.noisy_study", "summarise"),
+    ("spreadmap.experiments.plots", "plot_cost_study"),
+    ("spreadmap.experiments.plots", "plot_noisy_study"),
+    ("spreadmap.experiments.plots", "plot_sampling_study"),
+    ("spreadmap.experiments.replay", "build_world"),
+    ("spreadmap.experiments.replay", "calibrate_margin"),
+    ("spreadmap.experiments.replay", "honesty"),
+    ("spreadmap.experiments.replay", "replay_one"),
+    ("spreadmap.experiments.replay", "stops"),
+    ("spreadmap.experiments.replay_plots", "plot_replay"),
+    ("spreadmap.experiments.sampling_study", "flow_curve"),
+    ("spreadmap.experiments.sampling_study", "study"),
+    ("spreadmap.experiments.sampling_study", "summarise"),
     ("spreadmap.fidelity.correction", "config_block"),
     ("spreadmap.fidelity.correction", "correction"),
     ("spreadmap.fidelity.correction", "pairs"),
@@ -43,12 +102,36 @@ PUBLIC_API = [
     ("spreadmap.fidelity.study", "machine_description"),
     ("spreadmap.fidelity.study", "markdown_summary"),
     ("spreadmap.fidelity.study", "preset_errors"),
+    ("spreadmap.files", "atomic_path"),
+    ("spreadmap.files", "write_text_atomically"),
     ("spreadmap.logs", "log_to"),
     ("spreadmap.loop.cost", "PlannedCost"),
     ("spreadmap.loop.model", "make_map_fit"),
     ("spreadmap.loop.plots", "plot_converge_path"),
     ("spreadmap.loop.stepper", "step"),
     ("spreadmap.loop.stepper", "step_number"),
+    # spreadmap.maps.grids (choose_machine_y, values, grid_frame, evaluate, f_effect,
+    # regime_probabilities) and spreadmap.maps.parallel (usable_cases, best_case,
+    # parallel_coordinates) are left out on purpose: their code is being changed by other work,
+    # and their docstrings are covered later, with that change.
+    ("spreadmap.maps.floors", "box_sample"),
+    ("spreadmap.maps.floors", "by_band"),
+    ("spreadmap.maps.floors", "compare"),
+    ("spreadmap.maps.floors", "piles_by_band"),
+    ("spreadmap.maps.floors_plot", "plot_ratio_box"),
+    ("spreadmap.maps.floors_plot", "plot_side_by_side"),
+    ("spreadmap.maps.labels", "end_label"),
+    ("spreadmap.maps.labels", "right_labels"),
+    ("spreadmap.maps.labels", "which_labelled"),
+    ("spreadmap.maps.machine", "machine_map"),
+    ("spreadmap.maps.powder", "powder_band_map"),
+    ("spreadmap.maps.powder", "powder_cluster_map"),
+    ("spreadmap.maps.regimes", "regime_overlay"),
+    ("spreadmap.maps.style", "MapResult"),
+    ("spreadmap.maps.style", "fmt"),
+    ("spreadmap.maps.style", "set_limits"),
+    ("spreadmap.maps.style", "support_note"),
+    ("spreadmap.maps.style", "support_rule"),
     ("spreadmap.metrics", "case_metrics"),
     ("spreadmap.metrics.noise", "calibration_factors"),
     ("spreadmap.noise_law.apply", "case_noise"),
@@ -69,6 +152,25 @@ PUBLIC_API = [
     ("spreadmap.sampling", "lattice"),
     ("spreadmap.sensitivity", "plot_ranking"),
     ("spreadmap.sensitivity", "sensitivity"),
+    ("spreadmap.study.cases", "cpu_hours_to_go"),
+    ("spreadmap.study.cases", "finished_table"),
+    ("spreadmap.study.cases", "loop_cases"),
+    ("spreadmap.study.cases", "loop_labels"),
+    ("spreadmap.study.cases", "planned_cases"),
+    ("spreadmap.study.cases", "planned_sweeps"),
+    ("spreadmap.study.cases", "progress"),
+    ("spreadmap.study.checksums", "PublishedFileError"),
+    ("spreadmap.study.checksums", "check_folder"),
+    ("spreadmap.study.checksums", "listed_files"),
+    ("spreadmap.study.checksums", "republish_if_listed"),
+    ("spreadmap.study.checksums", "sha256"),
+    ("spreadmap.study.checksums", "verified_bytes"),
+    ("spreadmap.study.checksums", "write_manifest"),
+    ("spreadmap.study.restore", "UnkeyedTableError"),
+    ("spreadmap.study.restore", "restore_cases"),
+    ("spreadmap.study.restore", "restore_steps"),
+    ("spreadmap.study.summary", "summary_markdown"),
+    ("spreadmap.study.summary", "trends"),
     ("spreadmap.study_rule", "convergence_table"),
     ("spreadmap.study_rule", "first_stable_n"),
     ("spreadmap.study_rule", "running_statistics"),
@@ -90,6 +192,8 @@ PUBLIC_API = [
     ("spreadmap.surrogate.heldout", "match_runs"),
     ("spreadmap.surrogate.heldout", "runs_of"),
     ("spreadmap.surrogate.heldout", "score"),
+    ("spreadmap.surrogate.plots", "plot_all"),
+    ("spreadmap.surrogate.plots", "plot_heldout"),
     ("spreadmap.surrogate.saved_model", "ModelFileError"),
     ("spreadmap.surrogate.settings", "map_config"),
     ("spreadmap.table", "build_table"),
