@@ -10,11 +10,11 @@ then ``draw_powder_band_map``, ...), so a figure can be redrawn from its CSV;
 title and in its CSV (spreadmap.figures.save_figure).
 """
 from .grids import choose_machine_y
-from .machine import machine_map
+from .machine import machine_grid, machine_map
 from .parallel import best_case, parallel_coordinates, usable_cases
 from .powder import powder_band_map, powder_cluster_map
 from .regimes import REGIMES, regime_overlay
 from .style import MapResult
 
-__all__ = ["MapResult", "machine_map", "powder_band_map", "powder_cluster_map", "parallel_coordinates",
+__all__ = ["MapResult", "machine_map", "machine_grid", "powder_band_map", "powder_cluster_map", "parallel_coordinates",
            "best_case", "usable_cases", "regime_overlay", "REGIMES", "choose_machine_y"]

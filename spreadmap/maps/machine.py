@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import matplotlib
 import numpy as np
+import pandas as pd
 from matplotlib import colors as mcolors
 from matplotlib.lines import Line2D
 from matplotlib.patches import Ellipse, Polygon
@@ -79,10 +80,45 @@ def machine_map(model, stem, y: str = "pd", f: float = MACHINE["f"], d_um: float
         If explicit h or v values are empty, or a grid size is below 2 (``grids.values``).
     """
     support = support or grids.MAP_DEFAULTS["support"]
+    grid = machine_grid(model, y, f, d_um, n_h, n_v, h_values, v_values, ranges, support)
+    h, v = grids.values(h_values, n_h, "h_um", ranges), grids.values(v_values, n_v, "v_mm_s", ranges)
+    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note, floor)
+
+
+def machine_grid(model, y: str = "pd", f: float = MACHINE["f"], d_um: float = MACHINE["d_um"],
+                 n_h: int = MACHINE["n_h"], n_v: int = MACHINE["n_v"], h_values=None, v_values=None,
+                 ranges=None, support=None) -> pd.DataFrame:
+    """The numbers of the machine map: the (h, v) grid at powder (f, d) evaluated for MFR and y.
+
+    Parameters
+    ----------
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate; it must model ``mfr`` and ``y``.
+    y : str, optional
+        The target on the map's y axis.
+    f : float, optional
+        Friction coefficient [-].
+    d_um : float, optional
+        Particle diameter [um].
+    n_h, n_v : int, optional
+        Grid sizes of h and v over their ranges (ends included; at least 2).
+    h_values, v_values : array_like or None, optional
+        Explicit h [um] and v [mm/s] values instead of ``n_h`` and ``n_v``.
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+    support : dict or None, optional
+        The config's ``maps.support``; None: the schema's.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``grids.evaluate``'s table, h varying slowest, then v: the four parameters, per target its
+        mean, model SD and noise SD, and ``supported``.
+    """
+    support = support or grids.MAP_DEFAULTS["support"]
     h = grids.values(h_values, n_h, "h_um", ranges)
     v = grids.values(v_values, n_v, "v_mm_s", ranges)
-    grid = grids.evaluate(model, grids.grid_frame(f=f, d_um=d_um, h_um=h, v_mm_s=v), ["mfr", y], support)
-    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note, floor)
+    return grids.evaluate(model, grids.grid_frame(f=f, d_um=d_um, h_um=h, v_mm_s=v), ["mfr", y], support)
 
 
 # where the noise cross may go (axes fractions of its left end; its note runs ~0.35 to the right)

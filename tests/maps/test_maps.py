@@ -301,6 +301,21 @@ def test_powder_cluster_numbers_are_the_closed_form():
 RULES_CF = {"jam_mfr_max": 0.15, "short_feed_coverage_min": 0.55, "short_feed_thickness_min": 0.6}
 
 
+def test_machine_numbers_are_the_closed_form():
+    """machine_grid on a closed-form model: the (h, v) grid at (f, d), h varying slowest, MFR and y
+    the model's known functions, their run SDs the model SD and noise in quadrature, the support
+    the distance to the data; the map drawn from it saves the same numbers."""
+    cf = ClosedForm()
+    grid = machine.machine_grid(cf, "thickness_ratio", f=0.25, d_um=35.0, h_values=[70, 60], n_v=3, support=SUPPORT)
+    X = grid[list(NAMES)].to_numpy()
+    assert X.tolist() == [[0.25, 35.0, h, v] for h in (60.0, 70.0) for v in (5.0, 10.0, 15.0)]
+    np.testing.assert_allclose(grid["mfr"], syn.truth_mfr(X), rtol=1e-12)
+    np.testing.assert_allclose(grid["thickness_ratio"], 0.2 + 2.0 * syn.truth_mfr(X), rtol=1e-12)
+    np.testing.assert_allclose(grid["mfr_run_sd"], np.hypot(cf.model_sd(X, "mfr"), 0.015), rtol=1e-12)
+    np.testing.assert_allclose(grid["data_distance"], 1.5)
+    assert "pd" not in grid
+
+
 def test_regime_numbers_are_the_closed_form():
     """regime_tables on a closed-form model: each regime's probability from the predictive normal of
     MFR, coverage and thickness / h (mean, run SD), computed here with scipy, at the cases' own
