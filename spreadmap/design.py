@@ -129,26 +129,78 @@ class Design:
         return {n: {"min": a, "max": b} for n, a, b in zip(NAMES, self.low, self.high, strict=True)}
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds as two float arrays of shape (4,), in NAMES order, physical units."""
+        """Lower and upper bounds.
+
+        Returns
+        -------
+        low, high : tuple of numpy.ndarray
+            Two float arrays of shape (4,), in NAMES order, in physical units.
+        """
         return np.array(self.low, float), np.array(self.high, float)
 
     def to_physical(self, unit_points: np.ndarray) -> np.ndarray:
-        """Points of the unit cube [0, 1]^4 (shape (n, 4) or (4,), NAMES order) in physical units."""
+        """Points of the unit cube in physical units.
+
+        Parameters
+        ----------
+        unit_points : numpy.ndarray
+            Points in [0, 1]^4, shape (n, 4) or (4,), columns in NAMES order.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``low + unit_points * (high - low)``: f [-], d_um [um], h_um [um], v_mm_s [mm/s]; same shape.
+        """
         low, high = self.bounds()
         return low + np.asarray(unit_points, float) * (high - low)
 
     def to_unit(self, points: np.ndarray) -> np.ndarray:
-        """Points in physical units (shape (n, 4) or (4,), NAMES order) scaled to [0, 1] per parameter."""
+        """Points in physical units scaled to the unit cube (the inverse of ``to_physical``).
+
+        Parameters
+        ----------
+        points : numpy.ndarray
+            Points in physical units, shape (n, 4) or (4,), columns in NAMES order.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(points - low) / (high - low)``, same shape (outside [0, 1] for points outside the ranges).
+        """
         low, high = self.bounds()
         return (np.asarray(points, float) - low) / (high - low)
 
     def axis(self, name: str, n: int) -> np.ndarray:
-        """``n`` evenly spaced values of parameter ``name`` over its range, both ends included."""
+        """Evenly spaced values of one parameter over its range, both ends included.
+
+        Parameters
+        ----------
+        name : str
+            The parameter (one of ``NAMES``).
+        n : int
+            How many values.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``numpy.linspace(low, high, n)`` of the parameter, in its unit.
+        """
         i = NAMES.index(name)
         return np.linspace(self.low[i], self.high[i], n)
 
     def label(self, name: str) -> str:
-        """The axis label of parameter ``name``, with its unit (for figures)."""
+        """The axis label of one parameter, with its unit (for figures).
+
+        Parameters
+        ----------
+        name : str
+            The parameter (one of ``NAMES``).
+
+        Returns
+        -------
+        str
+            Its ``Parameter.label``, e.g. ``"blade speed v [mm/s]"``.
+        """
         return BY_NAME[name].label
 
 

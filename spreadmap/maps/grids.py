@@ -22,7 +22,29 @@ MAP_DEFAULTS = checked("maps")
 
 
 def values(given, n: int, name: str, ranges=None) -> np.ndarray:
-    """Explicit values if given, else n values spanning the range of ``name`` (ends included)."""
+    """The values of one map axis: the explicit ones if given (sorted), else ``n`` spanning its range.
+
+    Parameters
+    ----------
+    given : array_like or None
+        Explicit values in the parameter's unit; None: ``n`` values over the range.
+    n : int
+        How many values over the range, both ends included (at least 2); used only without `given`.
+    name : str
+        The parameter (one of ``NAMES``: f, d_um, h_um, v_mm_s).
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+
+    Returns
+    -------
+    numpy.ndarray
+        The axis values, ascending, in the parameter's unit.
+
+    Raises
+    ------
+    ValueError
+        If `given` is empty, or `n` is below 2 without `given`.
+    """
     if given is not None:
         v = np.asarray(given, float).ravel()
         if v.size == 0:
@@ -34,16 +56,48 @@ def values(given, n: int, name: str, ranges=None) -> np.ndarray:
 
 
 def grid_frame(**columns) -> pd.DataFrame:
-    """Full tensor grid, NAMES column order, the first given name varying slowest."""
+    """The full tensor grid of the given columns, the first given name varying slowest.
+
+    Parameters
+    ----------
+    **columns : array_like or float
+        One entry per parameter of ``NAMES`` (f [-], d_um [um], h_um [um], v_mm_s [mm/s]): its
+        values (a scalar for a fixed one).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per grid point, columns in NAMES order.
+    """
     order = [n for n in NAMES if n in columns]
     mesh = np.meshgrid(*[np.atleast_1d(np.asarray(columns[n], float)) for n in order], indexing="ij")
     return pd.DataFrame({n: m.ravel() for n, m in zip(order, mesh)})[list(NAMES)]
 
 
 def evaluate(model, frame: pd.DataFrame, targets, support: dict) -> pd.DataFrame:
-    """``frame`` with, per target, ``<t>``, ``<t>_model_sd``, ``<t>_run_sd``, ``<t>_noise_sd``,
-    ``<t>_sd_ratio`` (the model's own SD over the noise SD, before any preset correction); and
-    ``data_distance`` and ``supported`` (see the module docstring)."""
+    """Grid points evaluated on the surrogate, with whether the data support each.
+
+    Parameters
+    ----------
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate (its ``correction``, if any, applied to the means and SDs; the
+        support is judged on its own uncorrected SDs).
+    frame : pandas.DataFrame
+        The points: columns NAMES in physical units (``grid_frame``).
+    targets : sequence of str
+        The targets evaluated.
+    support : dict
+        The config's ``maps.support``: ``max_distance`` (median case spacings) and
+        ``max_sd_ratio`` (model SD over one run's noise SD).
+
+    Returns
+    -------
+    pandas.DataFrame
+        `frame` with, per target, ``<t>`` (mean), ``<t>_model_sd``, ``<t>_run_sd``,
+        ``<t>_noise_sd``, ``<t>_sd_ratio`` (the model's own SD over the noise SD, before any preset
+        correction), in the target's unit; and ``data_distance`` and ``supported`` (the module
+        docstring).
+    """
     X = frame[list(NAMES)].to_numpy(float)
     out = frame.copy()
     # whether the data support a point is the model's own knowledge against its cases' noise: a
@@ -66,9 +120,36 @@ def evaluate(model, frame: pd.DataFrame, targets, support: dict) -> pd.DataFrame
 
 def f_effect(model, targets, h_um: float, v_mm_s: float, d: np.ndarray, f_low: float, f_high: float,
              draws: int = 200, seed: int = 0) -> pd.DataFrame:
-    """Per d: the change of each target from f_low to f_high on the mean function, with a 95 %
-    interval from joint draws (both ends of the change in the same draw), and the probability
-    that the change is positive."""
+    """Per d: the change of each target from f_low to f_high, with its 95 % interval and P(change > 0).
+
+    The change is read on the mean function; its interval and probability from joint draws (both
+    ends of the change in the same draw).
+
+    Parameters
+    ----------
+    model : spreadmap.surrogate.saved_model.SurrogateModel
+        The fitted surrogate.
+    targets : sequence of str
+        The targets.
+    h_um : float
+        Layer thickness [um].
+    v_mm_s : float
+        Blade speed [mm/s].
+    d : numpy.ndarray
+        Particle diameters [um], shape (n,).
+    f_low, f_high : float
+        The two friction coefficients [-].
+    draws : int, optional
+        Joint draws of the model.
+    seed : int, optional
+        Seed of the draws.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per d: ``d_um`` and per target ``<t>_change``, ``<t>_change_low``,
+        ``<t>_change_high`` (2.5 and 97.5 % of the draws) and ``<t>_p_increase``.
+    """
     X = np.vstack([grid_frame(f=f_low, d_um=d, h_um=h_um, v_mm_s=v_mm_s).to_numpy(),
                    grid_frame(f=f_high, d_um=d, h_um=h_um, v_mm_s=v_mm_s).to_numpy()])
     F = model.draws(X, draws, seed=seed, targets=list(targets))
@@ -87,10 +168,27 @@ REGIME_TARGETS = ("mfr", "coverage", "thickness_ratio")  # what metrics.classify
 
 
 def regime_probabilities(frame: pd.DataFrame, rules: dict) -> pd.DataFrame:
-    """Probability that a new DEM run at each point falls in each regime: ``metrics.classify``'s
-    rule (jamming if MFR < jam_mfr_max, else short feed if coverage or thickness / h is below its
-    threshold) applied to the predictive normal of each target (model and noise, ``<t>_run_sd``),
-    by ``metrics.regime_probabilities`` (the targets' errors taken as independent)."""
+    """Probability that a new DEM run at each point falls in each regime.
+
+    ``metrics.classify``'s rule (jamming if MFR < jam_mfr_max, else short feed if coverage or
+    thickness / h is below its threshold) applied to the predictive normal of each target (model
+    and noise, ``<t>_run_sd``), by ``metrics.regime_probabilities`` (the targets' errors taken as
+    independent).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        ``evaluate``'s table for ``REGIME_TARGETS``: ``mfr``, ``coverage``, ``thickness_ratio``
+        and their ``_run_sd``.
+    rules : dict
+        The config's ``regime`` thresholds (``jam_mfr_max``, ``short_feed_coverage_min``,
+        ``short_feed_thickness_min``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        `frame` with ``p_jamming``, ``p_short_feed`` and ``p_normal`` (summing to 1).
+    """
     from ..metrics import regime_probabilities as probabilities
 
     p = probabilities(frame["mfr"], frame["mfr_run_sd"], frame["coverage"], frame["coverage_run_sd"],
@@ -102,11 +200,28 @@ def regime_probabilities(frame: pd.DataFrame, rules: dict) -> pd.DataFrame:
 
 def choose_machine_y(cases: pd.DataFrame, targets) -> tuple[str, pd.DataFrame]:
     """The machine map's y axis: of the layer-quality targets present, the one carrying most
-    information beyond MFR, else PD. Score: the variance of the target left after a straight-line
-    fit on MFR, over its noise variance where the table gives ``<t>_sd`` (signal beyond MFR against
-    noise), else the unexplained share 1 - r^2. The table gives each candidate's Pearson r with
-    MFR across the cases and its 95 % interval (scipy), so the map can say how far y is from MFR
-    in disguise. ``targets``: the candidates (PD is scored too when given, for comparison)."""
+    information beyond MFR, else PD.
+
+    Score: the variance of the target left after a straight-line fit on MFR, over its noise
+    variance where the table gives ``<t>_sd`` (signal beyond MFR against noise), else the
+    unexplained share 1 - r^2. The table gives each candidate's Pearson r with MFR across the cases
+    and its 95 % interval (scipy), so the map can say how far y is from MFR in disguise.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        The usable cases: ``mfr``, the candidates and, where known, their ``<t>_sd``.
+    targets : iterable of str
+        The candidates (the surrogate's targets); PD is scored too when given, for comparison.
+
+    Returns
+    -------
+    y : str
+        The chosen target (``pd`` when no layer-quality target scores).
+    scores : pandas.DataFrame
+        One row per scored candidate: ``target``, ``score``, ``how`` (which score), ``n`` (cases),
+        ``r_with_mfr`` with ``r_low`` and ``r_high``.
+    """
     cands = [t for t in (*LAYER_TARGETS, "pd") if t in targets and t in cases]
     rows = []
     for t in cands:

@@ -2,7 +2,7 @@
 parameters, coloured by normalised MFR (top) and PD (bottom), the best case drawn thick."""
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, Mapping
 
 import matplotlib
 
@@ -21,7 +21,18 @@ from .style import fmt as _fmt
 
 
 def usable_cases(cases: pd.DataFrame) -> pd.DataFrame:
-    """Cases fit for statistics: status ok, not flagged, finite MFR and PD (where present)."""
+    """Cases fit for statistics: usable (``spreadmap.table.usable``), with finite MFR and PD where present.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        A results table.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows kept, with `cases`' index and columns.
+    """
     keep = usable(cases)
     for t in ("mfr", "pd"):
         if t in cases:
@@ -37,8 +48,27 @@ def best_case(
     """The best case of a table of (usable) cases.
 
     Default rule: the highest PD among the cases with MFR >= ``mfr_min`` (a dense layer from a
-    setting that still flows).  With ``score`` given, the case with the highest
-    ``score(cases)`` among those same cases.  Raises ValueError if no case qualifies.
+    setting that still flows). With ``score`` given, the case with the highest ``score(cases)``
+    among those same cases.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        Usable cases with ``mfr`` and ``pd``.
+    mfr_min : float, optional
+        The least MFR [-] a case needs to qualify.
+    score : callable or None, optional
+        ``score(cases) -> array`` of one value per case, higher better; None: PD.
+
+    Returns
+    -------
+    pandas.Series
+        The best case's row.
+
+    Raises
+    ------
+    ValueError
+        If no case has MFR >= `mfr_min`, or no qualifying case has a finite score.
     """
     ok = cases[cases["mfr"].to_numpy(float) >= mfr_min]
     if ok.empty:
@@ -54,18 +84,45 @@ def parallel_coordinates(
     path_stem,
     mfr_min: float = 0.0,
     score: Callable[[pd.DataFrame], np.ndarray] | None = None,
-    ranges: dict | None = None,
+    ranges: Design | Mapping | None = None,
     n_ticks: int = 5,
     floor: str | None = None,
 ) -> MapResult:
     """Parallel coordinates of a sample of DEM cases (the converged LDS sample).
 
-    Only usable cases (status ok, not flagged, finite MFR and PD) are drawn.  Axes: the four
-    parameters, each normalised to its design range (``design.bounds(ranges)``) and ticked in
-    physical units.  Top panel coloured by normalised MFR, bottom by normalised PD (min-max over
-    the drawn cases; the colour bars give the physical values too).  The best case (see
-    :func:`best_case`: ``mfr_min`` and ``score``) is drawn thick red and annotated.  CSV: the
-    drawn cases with their normalised values and a boolean column ``best``.
+    Only usable cases (``usable_cases``) are drawn. Axes: the four parameters, each normalised to
+    its design range and ticked in physical units. Top panel coloured by normalised MFR, bottom by
+    normalised PD (min-max over the drawn cases; the colour bars give the physical values too).
+    The best case (``best_case``: ``mfr_min`` and ``score``) is drawn thick red and annotated.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        A results table.
+    path_stem : pathlib.Path or str
+        Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.
+    mfr_min : float, optional
+        The least MFR [-] of the best case.
+    score : callable or None, optional
+        The best case's score (``best_case``); None: PD.
+    ranges : Design, mapping or None, optional
+        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
+    n_ticks : int, optional
+        Ticks per parameter axis.
+    floor : str or None, optional
+        The floor the cases ran on (``spreadmap.case.substrate.floor_label``), named on the figure
+        and in the CSV.
+
+    Returns
+    -------
+    MapResult
+        ``paths`` (``png``, ``pdf``, ``csv``), ``data``: the drawn cases with their normalised
+        values and a boolean column ``best``, and ``info`` (the best case).
+
+    Raises
+    ------
+    ValueError
+        If no case is usable, or none qualifies as the best (``best_case``).
     """
     data = usable_cases(cases).copy()
     if data.empty:

@@ -15,8 +15,7 @@ class:
 * a ``Returns`` (or ``Yields``) section unless the return annotation says None (a callable
   without a return annotation must document what it returns).
 
-Pure Python, no numpydoc needed. Not listed yet: spreadmap.maps.grids and spreadmap.maps.parallel,
-whose code other work is changing (see the comment in PUBLIC_API); their docstrings come with it.
+Pure Python, no numpydoc needed.
 """
 from __future__ import annotations
 
@@ -70,7 +69,9 @@ PUBLIC_API = [
     ("spreadmap.decisions", "recommendations"),
     ("spreadmap.decisions.explorer", "write_explorer"),
     ("spreadmap.decisions.figure", "decision_figure"),
+    ("spreadmap.design", "Design"),
     ("spreadmap.design", "bounds"),
+    ("spreadmap.design", "h_over_d"),
     ("spreadmap.design", "to_physical"),
     ("spreadmap.design", "to_unit"),
     ("spreadmap.experiments.cost_study", "cpu_needed"),
@@ -110,20 +111,26 @@ PUBLIC_API = [
     ("spreadmap.loop.plots", "plot_converge_path"),
     ("spreadmap.loop.stepper", "step"),
     ("spreadmap.loop.stepper", "step_number"),
-    # spreadmap.maps.grids (choose_machine_y, values, grid_frame, evaluate, f_effect,
-    # regime_probabilities) and spreadmap.maps.parallel (usable_cases, best_case,
-    # parallel_coordinates) are left out on purpose: their code is being changed by other work,
-    # and their docstrings are covered later, with that change.
     ("spreadmap.maps.floors", "box_sample"),
     ("spreadmap.maps.floors", "by_band"),
     ("spreadmap.maps.floors", "compare"),
     ("spreadmap.maps.floors", "piles_by_band"),
     ("spreadmap.maps.floors_plot", "plot_ratio_box"),
     ("spreadmap.maps.floors_plot", "plot_side_by_side"),
+    ("spreadmap.maps.grids", "choose_machine_y"),
+    ("spreadmap.maps.grids", "evaluate"),
+    ("spreadmap.maps.grids", "f_effect"),
+    ("spreadmap.maps.grids", "grid_frame"),
+    ("spreadmap.maps.grids", "regime_probabilities"),
+    ("spreadmap.maps.grids", "values"),
     ("spreadmap.maps.labels", "end_label"),
     ("spreadmap.maps.labels", "right_labels"),
     ("spreadmap.maps.labels", "which_labelled"),
+    ("spreadmap.maps.machine", "machine_grid"),
     ("spreadmap.maps.machine", "machine_map"),
+    ("spreadmap.maps.parallel", "best_case"),
+    ("spreadmap.maps.parallel", "parallel_coordinates"),
+    ("spreadmap.maps.parallel", "usable_cases"),
     ("spreadmap.maps.powder", "powder_band_map"),
     ("spreadmap.maps.powder", "powder_cluster_map"),
     ("spreadmap.maps.regimes", "regime_overlay"),
@@ -198,6 +205,7 @@ PUBLIC_API = [
     ("spreadmap.surrogate.settings", "map_config"),
     ("spreadmap.table", "build_table"),
     ("spreadmap.table", "usable"),
+    ("spreadmap.table", "usable_cases"),
     ("spreadmap.table", "write_table"),
 ]
 
