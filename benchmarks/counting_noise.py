@@ -35,7 +35,7 @@ import pandas as pd  # noqa: E402
 from scipy import stats  # noqa: E402
 
 from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.metrics import counting_constant, pooled_constant  # noqa: E402
+from spreadmap.noise_law.counting import counting_constant, pooled_constant  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -20,7 +20,8 @@ Rooms (sub-packages), one job each:
   settings to run a powder at; ``sensitivity`` -- the parameters ranked by influence.
 * ``metrics`` -- one case's raw YADE output reduced to its row of the results table (with the exact
   sphere/box volumes, ``metrics.geometry``).
-* ``noise_law`` -- the noise law fitted to seed repeats and applied to a results table.
+* ``noise_law`` -- the noise law fitted to seed repeats and applied to a results table; the
+  counting law's constant c from seed repeats (``noise_law.counting``).
 
 Where each concept is held (one module each):
 
@@ -36,8 +37,9 @@ Where each concept is held (one module each):
   rule's statistics per partition: ``study_rule.rule``
 * atomic writing: ``files`` (write_text_atomically, atomic_path); reading the workflow's files
   without taking a damaged one for data: ``records``
-* config loading and defaults: ``config`` (load: schemas/config.schema.yaml's defaults filled,
-  then the cross-key checks)
+* config defaults: ``schema`` (schemas/config.schema.yaml, the one place a default is stated;
+  ``schema.checked``: one section checked alone, defaults filled); loading a whole config:
+  ``config`` (load: the schema's defaults filled, then the cross-key checks)
 * noise model: ``noise_law`` (config ``noise_model``: ``fit``, ``apply``); a case's own estimate:
   ``metrics.noise``; a new run's SD at a point: ``surrogate.noise``
 * the loop: ``loop.stepper`` (one step; its criteria ``loop.map_criteria``)

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from ..config import checked
 from ..design import NAMES, bounds
+from ..schema import checked
 from ..surrogate.settings import BASE_TARGETS, LAYER_TARGETS
 
 

@@ -27,8 +27,8 @@ from typing import Iterable, Mapping
 import numpy as np
 import pandas as pd
 
-from ..config import checked
 from ..design import NAMES
+from ..schema import checked
 
 DEFAULT_LAW = checked("converge")["cost_law"]  # the schema's converge.cost_law, for a config without one
 

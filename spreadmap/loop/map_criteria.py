@@ -65,8 +65,8 @@ import pandas as pd
 from scipy import stats
 from sklearn.model_selection import KFold
 
-from ..config import checked
 from ..design import NAMES, Design
+from ..schema import checked
 from ..study_rule.rule import DEFAULT_FLOORS, STATISTICS
 from .model import FitFunction, MapModel, table_data, usable_rows
 

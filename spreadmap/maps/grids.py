@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..config import checked
 from ..design import NAMES, Design
+from ..schema import checked
 from ..surrogate.settings import LAYER_TARGETS
 
 # config `maps:` at the schema's defaults (schemas/config.schema.yaml): the maps' keyword defaults, for

@@ -21,11 +21,11 @@ from .flow import (
     window_passed_volume,
 )
 from .layer import layer_quality, upper_envelope
-from .noise import batch_means_sd, counting_constant, counting_sd, flow_trend, pooled_constant
+from .noise import batch_means_sd, counting_sd, flow_trend
 from .regime import REGIMES, RULE_KEYS, classify, regime_probabilities
 
 __all__ = ["MAX_WEDGE_OVERLAP", "MIN_HEAP_H2", "NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "batch_means_sd",
-           "case_metrics", "classify", "counting_constant", "counting_sd", "flow_trend", "heap_h2", "heap_volume",
+           "case_metrics", "classify", "counting_sd", "flow_trend", "heap_h2", "heap_volume",
            "layer_density", "layer_quality", "mass_flow_ratio", "measure", "measured_span", "passed_volume",
-           "pooled_constant", "powder", "regime_probabilities", "sphere_volume", "upper_envelope",
+           "powder", "regime_probabilities", "sphere_volume", "upper_envelope",
            "window_passed_volume"]

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..case.scene import DENSEST_PACKING
-from ..config import checked, section_schema
+from ..schema import checked, section_schema
 from .flow import heap_h2, layer_density, mass_flow_ratio, measured_span, powder, sphere_volume, window_passed_volume
 from .layer import layer_quality
 from .noise import batch_means_sd, counting_sd, flow_trend

@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..config import checked, section_schema
 from ..metrics.noise import NOISE_SD_COLUMNS, calibrated_noise
+from ..schema import checked, section_schema
 from .cells import COUNT
 
 MODEL_TARGETS = tuple(COUNT)  # mfr, pd

@@ -71,7 +71,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as _st
 
-from ..config import checked
+from ..schema import checked
 from ..table import usable as usable_rows
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")

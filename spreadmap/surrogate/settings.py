@@ -1,11 +1,11 @@
 """The surrogate's configuration: the `surrogate:` section of config.yaml, its defaults read from
-schemas/config.schema.yaml (one place states them; spreadmap.config.checked), checked without
+schemas/config.schema.yaml (one place states them; spreadmap.schema.checked), checked without
 importing scikit-learn."""
 from __future__ import annotations
 
 from collections.abc import Mapping
 
-from ..config import checked
+from ..schema import checked
 
 LAYER_TARGETS = ("layer_packing", "coverage", "roughness_d", "thickness_ratio")
 BASE_TARGETS = ("mfr", "pd")

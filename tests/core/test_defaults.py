@@ -102,8 +102,8 @@ CHANGED = {("convergence", "tolerance"): 0.0125, ("maps", "powder", "h_um"): 61.
 READ = """
 import inspect, json, sys
 from pathlib import Path
-import spreadmap.config
-spreadmap.config.SCHEMA = Path(sys.argv[1])  # before any module reads it
+import spreadmap.schema
+spreadmap.schema.SCHEMA = Path(sys.argv[1])  # before any module reads it
 from spreadmap.loop import cost, stepper
 from spreadmap.loop.map_criteria import map_grids
 from spreadmap.maps import grids, machine, powder, regimes

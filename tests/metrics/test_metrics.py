@@ -12,15 +12,14 @@ from spreadmap.metrics import (
     batch_means_sd,
     case_metrics,
     classify,
-    counting_constant,
     counting_sd,
     flow_trend,
     layer_density,
     mass_flow_ratio,
     measured_span,
     passed_volume,
-    pooled_constant,
 )
+from spreadmap.noise_law.counting import counting_constant, pooled_constant
 
 D = 1.0  # work in units of the diameter
 R = 0.5 * D
