@@ -41,6 +41,7 @@ import numpy as np
 import pandas as pd
 
 from ..design import NAMES, to_physical, to_unit
+from ..files import write_text_atomically
 from ..loop import active
 from ..loop.map_criteria import map_grids
 from ..loop.model import make_map_fit
@@ -252,7 +253,7 @@ def run(methods: Sequence[str] = ("lds", "random", "lattice", "active"),
                 if log:
                     log(f"{noise} seed {seed} {method}: {time.process_time() - t:.1f} CPU s")
         if partial is not None:
-            pd.DataFrame(rows).to_csv(partial, index=False)
+            write_text_atomically(partial, pd.DataFrame(rows).to_csv(index=False))  # a checkpoint, whole or not at all
     return pd.DataFrame(rows)
 
 
