@@ -42,6 +42,6 @@ while read -r sum path; do
     fi
 done < "$work/old.sha256"
 awk 'NR == FNR {seen[$2] = 1; next} !($2 in seen) {print "new:     " $2}' "$work/old.sha256" "$work/new.sha256"
-echo "$(wc -l < "$work/old.sha256") outputs at $old, $(wc -l < "$work/new.sha256") at $new: " \
-     "$([ $status -eq 0 ] && echo "every one of $old's byte-identical" || echo "NOT all identical")"
+verdict="$([ $status -eq 0 ] && echo "every one of $old's byte-identical" || echo "NOT all identical")"
+echo "$(wc -l < "$work/old.sha256") outputs at $old, $(wc -l < "$work/new.sha256") at $new: $verdict"
 exit $status
