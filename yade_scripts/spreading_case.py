@@ -68,6 +68,8 @@ PARAMS = {
     "control_every": 100,
     "monitor_every": 1000,
     "progress_every_s": 10.0,
+    "surface_energy": 0.0,
+    "adhesion_gamma": 0.0,
     "rolling_resistance": False,
     "rolling_friction": 0.0,
     "rolling_stiffness": 0.0,
@@ -247,8 +249,19 @@ if P["substrate"] == "rough":
 
 # Hertz normal, Mindlin tangential with the Coulomb cap; viscous damping set by YADE from the
 # restitution coefficient (en, es); rolling resistance (ScGeom6D geometry) only when asked for.
+# Adhesion (DMT) through the same law when adhesion_gamma > 0: YADE's Ip2 sets each contact's
+# adhesionForce = 4 pi gamma R* (R* = r1 r2 / (r1 + r2) for two spheres, r for a sphere on a box),
+# the pull-off force of DMT with a work of adhesion 2 gamma (tests/case/test_adhesion_yade.py pulls
+# two spheres apart and reads it); the law subtracts it from the Hertz force while the spheres
+# overlap and drops the contact at zero overlap. adhesion_gamma is the real surface energy times
+# density_scale (the renderer's), so the scaled weight keeps the real Bond number. It applies to
+# every contact: sphere pairs, the substrate, the floor, the blade, and the frictionless side walls
+# (which hold a sphere against them, twice a pair's pull-off, and let it slide).
 ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(en=P["restitution"], es=P["restitution"])
 law = Law2_ScGeom_MindlinPhys_Mindlin()
+if P["adhesion_gamma"] > 0.0:
+    ip2.gamma = P["adhesion_gamma"]
+    law.includeAdhesion = True
 geometry_functors = [Ig2_Sphere_Sphere_ScGeom(), Ig2_Box_Sphere_ScGeom()]
 if P["rolling_resistance"]:
     ip2.krot = P["rolling_stiffness"]
@@ -352,14 +365,12 @@ def volume_behind(x_rear):
 
 
 def monitor():
-    """Every monitor_every steps: peak overlap, spheres that rolled off the ends of the floor
-    (removed: they would fall and accelerate for ever; the volume of those that had passed behind
-    the blade stays counted as passed), and the volume passed under the blade."""
-    overlap = max([i.geom.penetrationDepth / R for i in O.interactions if i.isReal] or [0.0])
-    state["peak_overlap_ratio"] = max(state["peak_overlap_ratio"], overlap)
-    attribute_overlap(overlap)
-    for by_phase, value in ((state["peak_overlap_by_phase"], overlap), (state["max_speed_by_phase"], max_speed())):
-        by_phase[state["phase"]] = max(by_phase.get(state["phase"], 0.0), value)
+    """Every monitor_every steps: the fastest sphere by phase, spheres that rolled off the ends of
+    the floor (removed: they would fall and accelerate for ever; the volume of those that had passed
+    behind the blade stays counted as passed), and the volume passed under the blade. (The peak
+    overlap is record_overlap's, read every overlap_every steps.)"""
+    by_phase = state["max_speed_by_phase"]
+    by_phase[state["phase"]] = max(by_phase.get(state["phase"], 0.0), max_speed())
     fallen = [b for b in spheres() if b.state.pos[2] < -2.0 * d]
     for b in fallen:
         if state["blade"] is not None and b.state.pos[0] < blade_rear_x():
@@ -451,6 +462,28 @@ def attribute_overlap(overlap):
         state["peak_overlap_wedged"] = max(state["peak_overlap_wedged"], overlap)
     else:
         state["peak_overlap_free"] = overlap
+
+
+def applied_adhesion():
+    """The adhesion the contact law applies, read off YADE's contacts (not recomputed): the pull-off
+    force of a sphere pair (phys.adhesionForce of the first real sphere-sphere contact) and of a
+    sphere on a box, and the Bond number, a pair's pull-off over one sphere's weight (simulated
+    mass x gravity: density scaling multiplies both, so it is the real powder's)."""
+    pair = wall = None
+    for i in O.interactions:
+        if not i.isReal:
+            continue
+        spheres_in = isinstance(O.bodies[i.id1].shape, Sphere) + isinstance(O.bodies[i.id2].shape, Sphere)
+        if spheres_in == 2 and pair is None:
+            pair = i.phys.adhesionForce
+        elif spheres_in == 1 and wall is None:
+            wall = i.phys.adhesionForce
+        if pair is not None and wall is not None:
+            break
+    weight = mass * P["gravity"]
+    return {"gamma": P["adhesion_gamma"], "surface_energy": P["surface_energy"], "weight": weight,
+            "pair_pull_off": pair, "wall_pull_off": wall,
+            "bond_number": None if pair is None else pair / weight}
 
 
 def kinetic_energy_settled():
@@ -589,6 +622,7 @@ def control():
     if phase == "settle":
         if (elapsed > 0.2 * P["settle_max_time"] and kinetic_energy_settled()) or elapsed > P["settle_max_time"]:
             state["settled_by_time"] = elapsed > P["settle_max_time"]
+            state["adhesion"] = applied_adhesion()
             if P.get("stop_after") == "settle":  # a poured bed, for the packing check
                 state["snapshots"]["settled"] = snapshot()
                 finish("ok")
@@ -705,6 +739,7 @@ raw = {
     "max_speed_by_phase": state["max_speed_by_phase"],
     "behind_series": state["behind_series"],
     "phase_cost": state["phase_cost"],
+    "adhesion": state.get("adhesion"),
     "frozen_particles": state["frozen"],
     "fed_particles": state["fed"],
     "snapshots": state["snapshots"],

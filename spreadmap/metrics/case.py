@@ -113,6 +113,14 @@ def flow_fall_reason(trend: float, trend_z: float, heap_end_h2: float, heap_min:
     return f"{fell}: the pile ran down"
 
 
+def _applied_bond_number(raw: dict) -> float:
+    """The Bond number the scene applied (``adhesion.bond_number`` of the raw record, read off the
+    contacts at the end of the settling); NaN when the record has none (a record from before
+    adhesion, or a case that ended before settling)."""
+    value = (raw.get("adhesion") or {}).get("bond_number")
+    return math.nan if value is None else float(value)
+
+
 def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict) -> dict:
     """Everything the results table needs from one raw record (ok, blown or failed).
 
@@ -158,6 +166,10 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         "critical_time_step": raw.get("critical_time_step", p["critical_time_step"]),
         "time_step_ratio": raw.get("time_step_ratio", p["time_step"] / p["critical_time_step"]),
         "density_scale": p["density_scale"],
+        # DMT adhesion: the real surface energy [J/m^2] (0 in records from before it) and the Bond
+        # number the scene applied (a sphere pair's pull-off over its weight, read off its contacts)
+        "surface_energy": p.get("surface_energy", 0.0),
+        "bond_number": _applied_bond_number(raw),
         "steps": raw.get("steps", math.nan), "simulated_time": raw.get("simulated_time", math.nan),
         "wall_time": raw.get("wall_time", math.nan),
         "cpu_time": raw.get("cpu_time", math.nan),
