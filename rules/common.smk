@@ -18,6 +18,7 @@ from spreadmap.case.migrate import legacy_case_folders
 from spreadmap.case.scene import UnsafeTimeStep
 from spreadmap.study.cases import loop_labels, planned_cases
 from spreadmap.case.substrate import floor_label
+from spreadmap.case.powder import powder_label
 from spreadmap.surrogate.correction import Correction, uncorrected_label
 from spreadmap.surrogate.correction import applies as correction_applies
 
@@ -34,7 +35,9 @@ SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list 
 RANGES = config.get("ranges")  # optional: without it, the design space of spreadmap.design
 SCENE_SHA256 = template_sha256()
 SWEEPS = config.get("sweeps") or {}  # optional: no fixed sweeps, no LDS sequence to start the main job from
-FLOOR = floor_label(config)  # the floor the cases are spread on, named on every map, table and report
+# the floor the cases are spread on and the powder model (dry or adhesive), named on every map,
+# table and report
+FLOOR = f"{floor_label(config)}; {powder_label(config)}"
 # what the map model's numbers are: the floor, and the preset's step to `reference` when config
 # `fidelity_correction` gives one (spreadmap.surrogate.correction); named on every map and decision
 _CORRECTION = Correction.from_config(config)

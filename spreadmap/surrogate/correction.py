@@ -165,7 +165,8 @@ class Correction:
 
 def applies(config: dict | None) -> str | None:
     """Why the config's `fidelity_correction` does not apply to the run it configures (measured for
-    another preset or floor), or None when it applies or there is none."""
+    another preset, floor or powder model), or None when it applies or there is none. Its
+    ``surface_energy_j_m2`` absent: measured on dry spheres (every correction before adhesion)."""
     config = config or {}
     section = config.get("fidelity_correction") or {}
     if section.get("preset") not in (None, config.get("preset", section.get("preset"))):
@@ -174,6 +175,12 @@ def applies(config: dict | None) -> str | None:
         floor = ((config.get("scene") or {}).get("substrate") or {}).get("kind", "flat")  # the schema's default
         if section.get("floor") not in (None, floor):
             return f"its factors were measured on the {section['floor']} floor"
+    if section and "material" in config:
+        measured = float(section.get("surface_energy_j_m2", 0.0))
+        runs = float((config.get("material") or {}).get("surface_energy_j_m2", 0.0))
+        if measured != runs:
+            return (f"its factors were measured with surface energy {measured * 1e3:g} mJ/m^2, "
+                    f"the run's is {runs * 1e3:g} mJ/m^2")
     return None
 
 

@@ -102,6 +102,11 @@ def test_a_factor_of_another_floor_or_preset_does_not_apply():
 
     cfg = spreadmap_config.load(ROOT / "config.yaml")
     assert cfg["fidelity_correction"]["floor"] == cfg["scene"]["substrate"]["kind"] == "rough"
+    # measured on dry spheres: the adhesive default does not take it, and its maps say why
+    assert cfg["material"]["surface_energy_j_m2"] == 1e-4
+    assert Correction.from_config(cfg) is None
+    assert applies(cfg) == "its factors were measured with surface energy 0 mJ/m^2, the run's is 0.1 mJ/m^2"
+    cfg["material"]["surface_energy_j_m2"] = 0.0
     assert Correction.from_config(cfg) is not None and applies(cfg) is None
     cfg["scene"]["substrate"]["kind"] = "flat"
     spreadmap_config.validate(cfg)
