@@ -6,7 +6,10 @@ Arms (each the shipped `default` preset and scene, one thing changed):
   dry_x1000     surface energy 0 (the seed study's cohesionless spheres), density x1000 (as shipped before);
   adh_x1000     surface energy `--gamma` (the real powder's), density x1000: the cohesive default;
   adh_x100      the same at density x100 (a 3.2x smaller step: ~3.2x the CPU);
-  adh_x10       the same at density x10 (~10x the CPU): the reference of this study.
+  adh_x10       the same at density x10 (~10x the CPU): the reference of this study;
+  adh_roll_x1000  adh_x1000 with YADE's rolling resistance on, eta = --rolling-eta (the cap of the
+                rolling moment, eta x mean radius x |Fn|; 0.25 is mu_r = 0.5 of a CDT/EPSD-style law
+                for equal spheres, the value Bouabbou & Vaudreuil calibrated for SS316L).
 The scene multiplies the surface energy by the density scale, so every arm has the real powder's
 Bond number; what scaling changes is the stiffness against the weight and the adhesion (see
 docs/adhesion). Points: fine / medium / coarse (d 15 / 30 / 45 um at f 0.3, h 60 um, v 10 mm/s),
@@ -39,7 +42,9 @@ from spreadmap.metrics.case import case_metrics
 
 ROOT = Path(__file__).resolve().parent.parent
 POINTS = {"fine": (0.30, 15.0, 60.0, 10.0), "medium": (0.30, 30.0, 60.0, 10.0), "coarse": (0.30, 45.0, 60.0, 10.0)}
-ARMS = {"dry_x1000": (False, 1000.0), "adh_x1000": (True, 1000.0), "adh_x100": (True, 100.0), "adh_x10": (True, 10.0)}
+ARMS = {"dry_x1000": (False, 1000.0), "adh_x1000": (True, 1000.0), "adh_x100": (True, 100.0), "adh_x10": (True, 10.0),
+        "adh_roll_x1000": (True, 1000.0)}
+DEFAULT_ARMS = ["dry_x1000", "adh_x1000", "adh_x100", "adh_x10"]
 REFERENCE_ARM = "adh_x10"
 COLUMNS = ("arm", "point", "seed", "case_id", "f", "d_um", "h_um", "v_mm_s", "surface_energy", "density_scale",
            "bond_number", "status", "flagged", "flag_reason", "regime", "mfr", "pd", "mfr_sd", "pd_sd", "n_passed",
@@ -47,11 +52,14 @@ COLUMNS = ("arm", "point", "seed", "case_id", "f", "d_um", "h_um", "v_mm_s", "su
            "peak_overlap_ratio", "cpu_time", "wall_time")
 
 
-def arm_config(base: dict, arm: str, gamma: float) -> tuple[dict, str]:
+def arm_config(base: dict, arm: str, gamma: float, rolling_eta: float = 0.25) -> tuple[dict, str]:
     """The config of an arm and the name of its preset (`default`, or `default_density_scale_<s>`)."""
     adhesive, scale = ARMS[arm]
     cfg = copy.deepcopy(base)
     cfg["material"]["surface_energy_j_m2"] = gamma if adhesive else 0.0
+    if arm == "adh_roll_x1000":
+        cfg["scene"]["rolling_resistance"] = {**cfg["scene"].get("rolling_resistance", {}), "enabled": True,
+                                              "rolling_friction": rolling_eta}
     name = "default" if scale == cfg["presets"]["default"]["density_scale"] else f"default_density_scale_{scale:g}"
     cfg["presets"][name] = {**cfg["presets"]["default"], "density_scale": scale}
     return cfg, name
@@ -59,7 +67,7 @@ def arm_config(base: dict, arm: str, gamma: float) -> tuple[dict, str]:
 
 def run_one(job: dict) -> dict:
     """Render, run and measure one case in its own folder; the row of the cases table."""
-    cfg, preset = arm_config(job["base"], job["arm"], job["gamma"])
+    cfg, preset = arm_config(job["base"], job["arm"], job["gamma"], job["rolling_eta"])
     f, d, h, v = POINTS[job["point"]]
     cid, params = case_scene({"f": f, "d_um": d, "h_um": h, "v_mm_s": v}, preset, cfg, job["seed"])
     folder = Path(job["keep"]) / cid
@@ -150,7 +158,8 @@ def main() -> None:
     ap.add_argument("--config", default=str(ROOT / "config.yaml"))
     ap.add_argument("--gamma", type=float, default=1e-4, help="the real surface energy, J/m^2 (default 1e-4)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
-    ap.add_argument("--arms", nargs="+", default=list(ARMS), choices=list(ARMS))
+    ap.add_argument("--arms", nargs="+", default=DEFAULT_ARMS, choices=list(ARMS))
+    ap.add_argument("--rolling-eta", type=float, default=0.25, help="adh_roll_x1000: YADE's eta (default 0.25)")
     ap.add_argument("--points", nargs="+", default=list(POINTS), choices=list(POINTS))
     ap.add_argument("--csv", required=True)
     ap.add_argument("--summary")
@@ -166,7 +175,8 @@ def main() -> None:
         # cheapest first: coarse before fine, x1000 before x10
         order = sorted(((a, p, s) for a in args.arms for p in args.points for s in args.seeds),
                        key=lambda j: (-ARMS[j[0]][1], -POINTS[j[1]][1], j[2]))
-        jobs = [{"base": base, "arm": a, "point": p, "seed": s, "gamma": args.gamma, "keep": args.keep}
+        jobs = [{"base": base, "arm": a, "point": p, "seed": s, "gamma": args.gamma, "keep": args.keep,
+                 "rolling_eta": args.rolling_eta}
                 for a, p, s in order if (a, p, s) not in done]
         print(f"{len(jobs)} cases to run ({len(done)} already in {out})", flush=True)
         with ProcessPoolExecutor(max_workers=args.workers) as pool:

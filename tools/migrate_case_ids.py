@@ -1,6 +1,8 @@
 #!/usr/bin/env python
 """Rename a workflow directory's case folders named before content keys (issue 35) to their content
-ids, without re-running them (spreadmap/case/migrate.py):
+ids, then carry the cases of a scene template that today's simulates identically (the dry cases of
+the template before adhesion, issue 49: spreadmap.case.migrate.EQUIVALENT_TEMPLATES) to today's ids,
+without re-running them (spreadmap/case/migrate.py):
 
     .venv/bin/python tools/migrate_case_ids.py WORKDIR [--dry-run]
 
@@ -18,7 +20,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from spreadmap.case.migrate import migrate_case_folders  # noqa: E402
+from spreadmap.case.migrate import carry_to_current_template, migrate_case_folders  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -36,6 +38,12 @@ def main(argv=None) -> int:
     for old, why in report["left"]:
         print(f"migrate_case_ids: left {old}: {why}")
     print(f"migrate_case_ids: {len(report['renamed'])} case folders {verb}, {len(report['left'])} left as they are")
+    carried = carry_to_current_template(cases, dry_run=args.dry_run)
+    for old, new in carried["renamed"]:
+        print(f"migrate_case_ids: {verb} {old} -> {new} (an earlier scene template that simulates the same)")
+    for old, why in carried["left"]:
+        print(f"migrate_case_ids: left {old}: {why}")
+    print(f"migrate_case_ids: {len(carried['renamed'])} case folders of an earlier template {verb}")
     return 0
 
 

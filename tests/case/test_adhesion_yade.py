@@ -83,6 +83,19 @@ def test_case_records_the_bond_number_its_powder_has(tmp_path, config):
     assert row["surface_energy"] == gamma
     assert not row["flagged"], row["flag_reason"]
     assert raw["escaped_particles"] == 0
+    # no sphere stuck to the blade for the whole window: one riding under its lower face at its speed
+    # at the window's start, middle and end (measured: 1, 2 and 2 such spheres, never the same one)
+    riding = [riding_under_blade(raw["snapshots"][m], params) for m in ("window_start", "window_middle", "window_end")]
+    print(f"spheres riding under the blade: {[sorted(r) for r in riding]}")
+    assert not set.intersection(*riding)
+
+
+def riding_under_blade(snapshot: dict, params: dict) -> set:
+    """The spheres (by their index in the snapshot) touching the blade's lower face and moving at its speed."""
+    r, h, tb, v = 0.5 * params["diameter"], params["gap"], params["blade_thickness"], params["blade_speed"]
+    x_rear = snapshot["blade_rear_x"]
+    return {i for i, (p, u) in enumerate(zip(snapshot["positions"], snapshot["velocities"]))
+            if x_rear - r < p[0] < x_rear + tb + r and h - 1.05 * r < p[2] < h + r and abs(u[0] - v) < 0.1 * v}
 
 
 def test_no_adhesion_applies_no_pull(tmp_path, config):

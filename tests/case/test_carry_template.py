@@ -1,0 +1,60 @@
+"""Cases of the scene template before adhesion (issue 49), carried to today's ids without re-running:
+the carried id is the one the workflow computes from scratch for the same point at surface energy 0
+(spreadmap.case.identity.case_id), and nothing else is touched."""
+import copy
+import json
+
+from spreadmap.case.identity import case_id, keyed_id
+from spreadmap.case.migrate import EQUIVALENT_TEMPLATES, carry_to_current_template
+from spreadmap.case.render import template_sha256
+
+OLD = "2faa01e6a62c2a28"  # the template before adhesion
+POINT = {"f": 0.3, "d_um": 30.0, "h_um": 65.0, "v_mm_s": 10.0}
+
+
+def test_the_listed_equivalence_leads_to_todays_template():
+    """Whoever changes the scene template decides whether the old dry cases still carry over (and
+    updates EQUIVALENT_TEMPLATES): until then this fails."""
+    assert EQUIVALENT_TEMPLATES[OLD][0] == template_sha256()
+
+
+def old_record(config, tmp_path, point=POINT):
+    """A finished case folder as the template before adhesion wrote it."""
+    from spreadmap.case.identity import case_scene
+
+    _, params = case_scene(point, "default", config)
+    params = {k: v for k, v in params.items() if k not in ("surface_energy", "adhesion_gamma")}
+    params["scene_sha256"] = OLD
+    old_id = keyed_id(params)
+    params["case_id"] = old_id
+    folder = tmp_path / "results" / "cases" / old_id
+    folder.mkdir(parents=True)
+    (folder / "raw.json").write_text(json.dumps({"params": params, "status": "ok"}))
+    (folder / "run.log").write_text(f"[{old_id}] done\n")
+    return folder
+
+
+def test_a_dry_case_of_the_old_template_gets_todays_id(config, tmp_path):
+    dry = copy.deepcopy(config)
+    dry["material"]["surface_energy_j_m2"] = 0.0
+    folder = old_record(dry, tmp_path)
+    cases = folder.parent
+    other = cases / "default-f0.3000-d30.000-h65.000-v10.0000-s1-0123abcd"  # another template: untouched
+    other.mkdir()
+    (other / "raw.json").write_text(json.dumps({"params": {"scene_sha256": "ffffffffffffffff"}}))
+    mtime = (folder / "run.log").stat().st_mtime_ns
+    report = carry_to_current_template(cases)
+    want = case_id(POINT, "default", dry)
+    assert report == {"renamed": [(folder.name, want)], "left": []}
+    assert sorted(p.name for p in cases.iterdir()) == sorted([want, other.name])
+    assert (cases / want / "run.log").read_text() == f"[{want}] done\n"
+    assert (cases / want / "run.log").stat().st_mtime_ns == mtime
+    assert carry_to_current_template(cases) == {"renamed": [], "left": []}  # a second run: nothing to do
+    # the adhesive default asks for another case: the dry one is kept beside it, not taken for it
+    assert want != case_id(POINT, "default", config)
+
+
+def test_dry_run_renames_nothing(config, tmp_path):
+    folder = old_record(config, tmp_path)
+    report = carry_to_current_template(folder.parent, dry_run=True)
+    assert len(report["renamed"]) == 1 and folder.exists()
