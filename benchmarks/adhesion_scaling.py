@@ -7,6 +7,8 @@ Arms (each the shipped `default` preset and scene, one thing changed):
   adh_x1000     surface energy `--gamma` (the real powder's), density x1000: the cohesive default;
   adh_x100      the same at density x100 (a 3.2x smaller step: ~3.2x the CPU);
   adh_x10       the same at density x10 (~10x the CPU): the reference of this study;
+  adh_energy_x1000  density x1000 with the surface energy x (10/1000)^(2/5) = 0.158: the x10 scene's
+                work of separating a contact, not its Bond number (below);
   adh_roll_x1000  adh_x1000 with YADE's rolling resistance on, eta = --rolling-eta (the cap of the
                 rolling moment, eta x mean radius x |Fn|; 0.25 is mu_r = 0.5 of a CDT/EPSD-style law
                 for equal spheres, the value Bouabbou & Vaudreuil calibrated for SS316L).
@@ -43,7 +45,11 @@ from spreadmap.metrics.case import case_metrics
 ROOT = Path(__file__).resolve().parent.parent
 POINTS = {"fine": (0.30, 15.0, 60.0, 10.0), "medium": (0.30, 30.0, 60.0, 10.0), "coarse": (0.30, 45.0, 60.0, 10.0)}
 ARMS = {"dry_x1000": (False, 1000.0), "adh_x1000": (True, 1000.0), "adh_x100": (True, 100.0), "adh_x10": (True, 10.0),
-        "adh_roll_x1000": (True, 1000.0)}
+        "adh_roll_x1000": (True, 1000.0), "adh_energy_x1000": (True, 1000.0)}
+# adh_energy_x1000: density x1000 with the surface energy lowered so that the work of pulling a
+# contact apart (~ pull-off x equilibrium overlap, ~ gamma^(5/3) S^(2/3) at stiffness E/S) is the
+# x10 scene's: gamma x (10 / 1000)^(2/5) = 0.158 gamma (its Bond number 0.158x the real one)
+ENERGY_MATCH = (10.0 / 1000.0) ** 0.4
 DEFAULT_ARMS = ["dry_x1000", "adh_x1000", "adh_x100", "adh_x10"]
 REFERENCE_ARM = "adh_x10"
 COLUMNS = ("arm", "point", "seed", "case_id", "f", "d_um", "h_um", "v_mm_s", "surface_energy", "density_scale",
@@ -56,7 +62,8 @@ def arm_config(base: dict, arm: str, gamma: float, rolling_eta: float = 0.25) ->
     """The config of an arm and the name of its preset (`default`, or `default_density_scale_<s>`)."""
     adhesive, scale = ARMS[arm]
     cfg = copy.deepcopy(base)
-    cfg["material"]["surface_energy_j_m2"] = gamma if adhesive else 0.0
+    cfg["material"]["surface_energy_j_m2"] = (gamma * (ENERGY_MATCH if arm == "adh_energy_x1000" else 1.0)
+                                              if adhesive else 0.0)
     if arm == "adh_roll_x1000":
         cfg["scene"]["rolling_resistance"] = {**cfg["scene"].get("rolling_resistance", {}), "enabled": True,
                                               "rolling_friction": rolling_eta}
@@ -153,6 +160,23 @@ def summary(rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def density_correction(rows: list[dict]) -> dict:
+    """The factor from density x1000 to x10 under adhesion, per target, with its SD at a point not
+    run: spreadmap.fidelity.correction on the arms' pairs (a point and a seed at both arms)."""
+    import pandas as pd
+
+    from spreadmap.fidelity.correction import config_block, correction
+
+    table = pd.DataFrame(rows).rename(columns={"arm": "preset", "point": "name"})
+    for column in ("seed", "f", "d_um", "h_um", "v_mm_s", "mfr", "pd", "mfr_sd", "pd_sd", "cpu_time"):
+        table[column] = pd.to_numeric(table[column], errors="coerce")
+    table["flagged"] = table["flagged"].astype(str) == "True"
+    result = correction(table, preset="adh_x1000", reference=REFERENCE_ARM)
+    block = config_block(result, source="docs/adhesion", floor="rough")
+    block.update({"preset": "default", "reference": "density x10"})
+    return {"result": result, "config_block": block}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--config", default=str(ROOT / "config.yaml"))
@@ -166,6 +190,7 @@ def main() -> None:
     ap.add_argument("--keep", default="/tmp/adhesion_scaling")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--summary-only", action="store_true")
+    ap.add_argument("--correction", help="write the x1000 -> x10 factor (JSON) here")
     args = ap.parse_args()
     base = spreadmap_config.load(args.config)
     out = Path(args.csv)
@@ -192,6 +217,10 @@ def main() -> None:
     print(text)
     if args.summary:
         write_text_atomically(Path(args.summary), text)
+    if args.correction:
+        corr = density_correction(read_rows(out))
+        write_text_atomically(Path(args.correction), json.dumps(corr, indent=1, default=float) + "\n")
+        print(json.dumps(corr["config_block"], indent=1))
 
 
 if __name__ == "__main__":
