@@ -33,21 +33,48 @@ include: "rules/pictures.smk"
 include: "rules/fidelity.smk"
 
 
+MAIN_JOB = [  # what the main job makes (rule all), before its timeline
+    "results/converge/stopped.json",
+    "results/summary.json",
+    "results/surrogate/model.joblib",
+    *prediction_targets(),
+    "results/maps/sensitivity_ranking_table.csv",
+    *rules.decisions.input,
+    *expand("results/pictures/{name}.png", name=PICTURES["cases"]),
+    *expand("results/vtk/{name}", name=PICTURES["vtk"]),
+]
+
+
 rule all:
     """The main job: a map you can trust within a budget. LDS cases, then batches until the map
     criteria hold or the budget is spent (rules/converge.smk); the surrogate and the maps on that
     run's table; predictions at the chosen points; the recommended settings and the explorer page
-    (rules/decisions.smk); pictures of the named cases."""
+    (rules/decisions.smk); pictures of the named cases; last, the run's timeline."""
     default_target: True
     input:
-        "results/converge/stopped.json",
-        "results/summary.json",
-        "results/surrogate/model.joblib",
-        prediction_targets(),
-        "results/maps/sensitivity_ranking_table.csv",
-        rules.decisions.input,
-        expand("results/pictures/{name}.png", name=PICTURES["cases"]),
-        expand("results/vtk/{name}", name=PICTURES["vtk"]),
+        MAIN_JOB,
+        "results/converge/timeline.png",
+
+
+rule timeline:
+    """Where the main job's wall time went: its jobs on the cores they ran on, from this run's
+    Snakemake log, the core time of the DEM cases, the loop's steps and the analyses, and the idle
+    time (spreadmap.loop.timeline). A run resumed after an interruption shows its last part."""
+    input:
+        MAIN_JOB,
+    output:
+        figure=report("results/converge/timeline.png", caption="rules/captions/timeline.rst", category="Convergence"),
+        summary="results/converge/timeline.json",
+    params:
+        cores=workflow.cores,
+        floor=FLOOR,
+    log:
+        "logs/timeline.log",
+    localrule: True
+    conda:
+        "envs/analysis.yaml"
+    script:
+        "scripts/timeline.py"
 
 
 rule sweeps:

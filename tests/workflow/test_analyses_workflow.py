@@ -28,7 +28,7 @@ SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
 })
 MAIN_FIGURES = ["path", "surrogate_parity", "surrogate_r2_vs_neurons", "surrogate_learning_curve", "machine_map",
                 "powder_band_map", "powder_cluster_map", "parallel_coordinates", "regime_overlay",
-                "sensitivity_ranking", "demo"]
+                "sensitivity_ranking", "demo", "timeline"]
 STUDY_FIGURES = ["distributions", "statistics", "sampling_study"]
 
 
@@ -46,10 +46,15 @@ def test_main_job_writes_every_analysis_output(finished_run):
     wf = finished_run / "results"
     for stem in ["convergence/distributions", "convergence/statistics", "convergence/sampling_study",
                  "surrogate/surrogate_parity", "maps/machine_map", "maps/powder_band_map", "maps/powder_cluster_map",
-                 "maps/parallel_coordinates", "maps/regime_overlay", "maps/sensitivity_ranking", "pictures/demo"]:
+                 "maps/parallel_coordinates", "maps/regime_overlay", "maps/sensitivity_ranking", "pictures/demo",
+                 "converge/timeline"]:
         for ext in ("png", "pdf", "csv"):
             assert (wf / f"{stem}.{ext}").stat().st_size > 0, f"{stem}.{ext}"
     assert (wf / "maps" / "regime_overlay_plane.csv").stat().st_size > 0  # the regime figure's (d, h) plane
+    # the run's timeline: its DEM cases on the cores, from this run's Snakemake log
+    timeline = json.loads((wf / "converge" / "timeline.json").read_text())
+    assert timeline["DEM_case_s"] > 0 and timeline["wall_s"] > 0 and timeline["lanes"] >= 1
+    assert 0.0 <= timeline["idle_share"] < 1.0
     summary = json.loads((wf / "convergence" / "summary.json").read_text())
     assert {"lds", "lattice"} <= set(summary["sweeps"])
     # the main job's summary covers the converge run and the chosen points; the sweeps have their own
