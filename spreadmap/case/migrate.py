@@ -134,17 +134,24 @@ def migrate_case_folders(cases_dir: Path | str, dry_run: bool = False) -> dict:
         if new is None:
             report["left"].append((folder.name, source))
             continue
-        target = cases_dir / new
-        if target.exists():
-            report["left"].append((folder.name, f"{new} exists already"))
-            continue
-        if not dry_run:
-            stat = folder.stat()
-            _rewrite_ids(folder, folder.name, new)
-            folder.rename(target)
-            os.utime(target, ns=(stat.st_atime_ns, stat.st_mtime_ns))
-        report["renamed"].append((folder.name, new, source))
+        if _rename_case(folder, new, dry_run, report):
+            report["renamed"].append((folder.name, new, source))
     return report
+
+
+def _rename_case(folder: Path, new: str, dry_run: bool, report: dict) -> bool:
+    """Rename a case folder to the id `new`, the id inside its text files with it, keeping the
+    modification times; False (and the folder left, reported) when `new` exists already."""
+    target = folder.parent / new
+    if target.exists():
+        report["left"].append((folder.name, f"{new} exists already"))
+        return False
+    if not dry_run:
+        stat = folder.stat()
+        _rewrite_ids(folder, folder.name, new)
+        folder.rename(target)
+        os.utime(target, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    return True
 
 
 # Scene templates whose cases a later template simulates identically, given the parameters it added:
@@ -199,14 +206,6 @@ def carry_to_current_template(cases_dir: Path | str, dry_run: bool = False,
         if keyed_id(params) != folder.name:
             report["left"].append((folder.name, f"the parameters in {source} are not this folder's"))
             continue
-        target = cases_dir / new
-        if target.exists():
-            report["left"].append((folder.name, f"{new} exists already"))
-            continue
-        if not dry_run:
-            stat = folder.stat()
-            _rewrite_ids(folder, folder.name, new)
-            folder.rename(target)
-            os.utime(target, ns=(stat.st_atime_ns, stat.st_mtime_ns))
-        report["renamed"].append((folder.name, new))
+        if _rename_case(folder, new, dry_run, report):
+            report["renamed"].append((folder.name, new))
     return report
