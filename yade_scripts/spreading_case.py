@@ -250,13 +250,14 @@ if P["substrate"] == "rough":
 # Hertz normal, Mindlin tangential with the Coulomb cap; viscous damping set by YADE from the
 # restitution coefficient (en, es); rolling resistance (ScGeom6D geometry) only when asked for.
 # Adhesion (DMT) through the same law when adhesion_gamma > 0: YADE's Ip2 sets each contact's
-# adhesionForce = 4 pi gamma R* (R* = r1 r2 / (r1 + r2) for two spheres, r for a sphere on a box),
-# the pull-off force of DMT with a work of adhesion 2 gamma (tests/case/test_adhesion_yade.py pulls
-# two spheres apart and reads it); the law subtracts it from the Hertz force while the spheres
-# overlap and drops the contact at zero overlap. adhesion_gamma is the real surface energy times
-# density_scale (the renderer's), so the scaled weight keeps the real Bond number. It applies to
-# every contact: sphere pairs, the substrate, the floor, the blade, and the frictionless side walls
-# (which hold a sphere against them, twice a pair's pull-off, and let it slide).
+# adhesionForce = 4 pi gamma R* (R* = r1 r2 / (r1 + r2) for two spheres, and R/2 for a sphere on a
+# box too, as in its Hertz contact), the pull-off force of DMT with a work of adhesion 2 gamma
+# (tests/case/test_adhesion_yade.py pulls two spheres, and a sphere off a box, apart and reads it);
+# the law subtracts it from the Hertz force while the bodies overlap and drops the contact at zero
+# overlap. adhesion_gamma is the real surface energy times density_scale (the renderer's), so the
+# scaled weight keeps the real Bond number. It applies to every contact: sphere pairs, the
+# substrate, the floor, the blade, and the frictionless side walls (which hold a sphere against them
+# with a pair's pull-off and let it slide).
 ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(en=P["restitution"], es=P["restitution"])
 law = Law2_ScGeom_MindlinPhys_Mindlin()
 if P["adhesion_gamma"] > 0.0:

@@ -18,13 +18,14 @@ def test_the_listed_equivalence_leads_to_todays_template():
     assert EQUIVALENT_TEMPLATES[OLD][0] == template_sha256()
 
 
-def old_record(config, tmp_path, point=POINT):
-    """A finished case folder as the template before adhesion wrote it."""
+def old_record(config, tmp_path, point=POINT, template=OLD):
+    """A finished case folder as an earlier template wrote it (before adhesion: without its parameters)."""
     from spreadmap.case.identity import case_scene
 
     _, params = case_scene(point, "default", config)
-    params = {k: v for k, v in params.items() if k not in ("surface_energy", "adhesion_gamma")}
-    params["scene_sha256"] = OLD
+    if template == OLD:
+        params = {k: v for k, v in params.items() if k not in ("surface_energy", "adhesion_gamma")}
+    params["scene_sha256"] = template
     old_id = keyed_id(params)
     params["case_id"] = old_id
     folder = tmp_path / "results" / "cases" / old_id
@@ -58,3 +59,11 @@ def test_dry_run_renames_nothing(config, tmp_path):
     folder = old_record(config, tmp_path)
     report = carry_to_current_template(folder.parent, dry_run=True)
     assert len(report["renamed"]) == 1 and folder.exists()
+
+
+def test_an_adhesive_case_of_the_first_adhesive_template_keeps_its_surface_energy(config, tmp_path):
+    """The template of the main job of 2026-12-06, before a comment was corrected: its adhesive
+    cases carry to the ids today's adhesive default asks for."""
+    folder = old_record(config, tmp_path, template="0ae31d5c9de2bce9")
+    report = carry_to_current_template(folder.parent)
+    assert report == {"renamed": [(folder.name, case_id(POINT, "default", config))], "left": []}
