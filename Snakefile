@@ -33,6 +33,15 @@ include: "rules/pictures.smk"
 include: "rules/fidelity.smk"
 
 
+def run_cores(wildcards):
+    """The cores the run was given (--cores); None without them (a cluster profile): the timeline
+    then counts the most jobs that ran at once."""
+    try:
+        return workflow.cores
+    except WorkflowError:
+        return None
+
+
 MAIN_JOB = [  # what the main job makes (rule all), before its timeline
     "results/converge/stopped.json",
     "results/summary.json",
@@ -66,7 +75,7 @@ rule timeline:
         figure=report("results/converge/timeline.png", caption="rules/captions/timeline.rst", category="Convergence"),
         summary="results/converge/timeline.json",
     params:
-        cores=workflow.cores,
+        cores=run_cores,
         floor=FLOOR,
     log:
         "logs/timeline.log",
