@@ -12,9 +12,7 @@ logs = sorted(Path(".snakemake/log").glob("*.snakemake.log"), key=lambda p: p.st
 if not logs:
     raise SystemExit("timeline: no Snakemake log in .snakemake/log")
 placed = place_on_cores(parse_log(logs[-1].read_text()))
-working = placed[placed["lane"] >= 0]
-cores = sm.params.cores or (int(working["lane"].max()) + 1 if len(working) else 1)  # a cluster run: the most at once
-summary = core_time(placed, int(cores))
+summary = core_time(placed, sm.params.cores)  # None (a cluster run): the most jobs at once
 stem = Path(sm.output.figure).with_suffix("")
 draw_timeline(placed, summary, stem, "the main job's timeline", floor=sm.params.floor)
 write_text_atomically(Path(sm.output.summary), json.dumps({**summary, "log": logs[-1].name}, indent=1) + "\n")

@@ -198,6 +198,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # ahead of the blade at a few times its speed
     impact_speed = max(math.sqrt(2.0 * g * cloud_height), 4.0 * v)
     contact = hertz_contact_time(0.5 * d, density, material, impact_speed)
+    surface_energy = float(material.get("surface_energy_j_m2", 0.0))  # 0: dry (configs before adhesion)
     return {
         "case_id": case_id,
         "point": {k: float(point[k]) for k in ("f", "d_um", "h_um", "v_mm_s")},
@@ -233,8 +234,8 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "progress_every_s": float(scene["progress_every_s"]),
         # DMT adhesion: the real surface energy, and the one the scene applies (x density_scale,
         # as the weight: the Bond number, pull-off / weight, is the real powder's)
-        "surface_energy": float(material.get("surface_energy_j_m2", 0.0)),
-        "adhesion_gamma": float(material.get("surface_energy_j_m2", 0.0)) * float(preset["density_scale"]),
+        "surface_energy": surface_energy,
+        "adhesion_gamma": surface_energy * float(preset["density_scale"]),
         "rolling_resistance": bool(rolling.get("enabled", False)),
         "rolling_friction": float(rolling.get("rolling_friction", 0.0)),
         "rolling_stiffness": float(rolling.get("stiffness_factor", 0.0)) * k_n * r * r,

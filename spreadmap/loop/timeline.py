@@ -112,15 +112,16 @@ def place_on_cores(jobs: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def core_time(placed: pd.DataFrame, cores: int) -> dict:
+def core_time(placed: pd.DataFrame, cores: int | None) -> dict:
     """The run's wall time and where the cores' time went.
 
     Parameters
     ----------
     placed : pandas.DataFrame
         ``place_on_cores``' table.
-    cores : int
-        The cores the run had (``--cores``).
+    cores : int or None
+        The cores the run had (``--cores``); None: the most jobs that ran at once (a cluster run,
+        which has no core count).
 
     Returns
     -------
@@ -134,13 +135,15 @@ def core_time(placed: pd.DataFrame, cores: int) -> dict:
         return {"wall_s": 0.0, "cores": cores, "busy_s": 0.0, "idle_s": 0.0, "idle_share": float("nan"),
                 "lanes": 0, "unfinished": 0}
     wall = (placed["end"].max() - placed["start"].min()).total_seconds()
-    out = {"wall_s": wall, "cores": cores}
     working = placed[placed["lane"] >= 0]
+    lanes = int(working["lane"].max() + 1) if len(working) else 0
+    cores = cores or max(lanes, 1)
+    out = {"wall_s": wall, "cores": cores}
     for kind in sorted(set(KINDS.values())):
         out[f"{kind.replace(' ', '_')}_s"] = float(working.loc[working["kind"] == kind, "seconds"].sum())
     out["busy_s"] = float(working["seconds"].sum())
     out["idle_s"] = max(0.0, cores * wall - out["busy_s"])
     out["idle_share"] = out["idle_s"] / (cores * wall) if wall > 0 else float("nan")
-    out["lanes"] = int(working["lane"].max() + 1) if len(working) else 0
+    out["lanes"] = lanes
     out["unfinished"] = int((~placed["finished"]).sum())
     return out

@@ -50,6 +50,7 @@ def test_jobs_their_cores_and_the_core_time_by_kind():
     assert summary["idle_s"] == 2 * 301 - (351 + 120)
     assert summary["idle_share"] == pytest.approx(131 / 602)
     assert summary["lanes"] == 2 and summary["unfinished"] == 1
+    assert core_time(placed, None) == summary  # no core count (a cluster run): the most jobs at once, 2
 
 
 def test_the_figure_redraws_from_its_numbers(tmp_path):
