@@ -33,15 +33,6 @@ include: "rules/pictures.smk"
 include: "rules/fidelity.smk"
 
 
-def run_cores(wildcards):
-    """The cores the run was given (--cores); None without them (a cluster profile): the timeline
-    then counts the most jobs that ran at once."""
-    try:
-        return workflow.cores
-    except WorkflowError:
-        return None
-
-
 MAIN_JOB = [  # what the main job makes (rule all), before its timeline
     "results/converge/stopped.json",
     "results/summary.json",

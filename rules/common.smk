@@ -218,3 +218,12 @@ def main_tables():
 wildcard_constraints:
     case=CASE_ID_PATTERN,
     set="[a-z][a-z0-9_]*",
+
+
+def run_cores(wildcards):
+    """The cores the run was given (--cores); None without them (a cluster profile): the timeline
+    then counts the most jobs that ran at once."""
+    try:
+        return workflow.cores
+    except WorkflowError:
+        return None
