@@ -26,21 +26,14 @@ from __future__ import annotations
 
 import argparse
 import copy
-import csv
-import io
 import json
-import math
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
 
 from spreadmap import config as spreadmap_config
-from spreadmap.case.identity import case_scene
-from spreadmap.case.launcher import run_case
-from spreadmap.case.render import render
+from spreadmap.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap.files import write_text_atomically
-from spreadmap.metrics.case import case_metrics
 
 ROOT = Path(__file__).resolve().parent.parent
 POINTS = {"fine": (0.30, 15.0, 60.0, 10.0), "medium": (0.30, 30.0, 60.0, 10.0), "coarse": (0.30, 45.0, 60.0, 10.0)}
@@ -76,88 +69,17 @@ def run_one(job: dict) -> dict:
     """Render, run and measure one case in its own folder; the row of the cases table."""
     cfg, preset = arm_config(job["base"], job["arm"], job["gamma"], job["rolling_eta"])
     f, d, h, v = POINTS[job["point"]]
-    cid, params = case_scene({"f": f, "d_um": d, "h_um": h, "v_mm_s": v}, preset, cfg, job["seed"])
-    folder = Path(job["keep"]) / cid
-    folder.mkdir(parents=True, exist_ok=True)
-    script = folder / "case.py"
-    write_text_atomically(script, render(params))
-    result = run_case(script, folder / "raw.json", folder / "run.log", params["timeout_s"])
-    row = {"arm": job["arm"], "point": job["point"], "seed": job["seed"], "case_id": cid,
-           "f": f, "d_um": d, "h_um": h, "v_mm_s": v, "cpu_time": result["cpu_time"], "wall_time": result["wall_time"]}
-    raw_path = folder / "raw.json"
-    if raw_path.exists():
-        raw = json.loads(raw_path.read_text())
-        out = case_metrics(raw, cfg["regime"], cfg["stability"], cfg["metrics"])
-        row.update({k: out.get(k) for k in COLUMNS if k not in row and k in out})
-    else:
-        row.update({"status": result["outcome"], "flagged": True, "flag_reason": result["reason"]})
-    row["surface_energy"] = params["surface_energy"]
-    row["density_scale"] = params["density_scale"]
+    row, params = run_arm_case(cfg, preset, {"f": f, "d_um": d, "h_um": h, "v_mm_s": v}, job["seed"], job["keep"], COLUMNS)
+    row.update({"arm": job["arm"], "point": job["point"], "surface_energy": params["surface_energy"],
+                "density_scale": params["density_scale"]})
     return row
-
-
-def read_rows(path: Path) -> list[dict]:
-    if not path.exists():
-        return []
-    return list(csv.DictReader(io.StringIO(path.read_text())))
-
-
-def write_rows(path: Path, rows: list[dict]) -> None:
-    buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=COLUMNS, extrasaction="ignore")
-    writer.writeheader()
-    writer.writerows(rows)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomically(path, buf.getvalue())
-
-
-def number(x) -> float:
-    try:
-        return float(x)
-    except (TypeError, ValueError):
-        return math.nan
 
 
 def summary(rows: list[dict]) -> str:
     """Per point and arm: MFR, PD and the layer's coverage (mean of the seeds, SE from their
     spread), the difference from the reference arm with its SE, and the CPU per case."""
-    lines = ["| point | arm | Bond | seeds | MFR | PD | coverage | MFR - x10 | PD - x10 | CPU s (median) |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-
-    def stats(group, key):
-        x = np.array([number(r[key]) for r in group])
-        x = x[np.isfinite(x)]
-        if len(x) == 0:
-            return math.nan, math.nan, 0
-        return float(x.mean()), (float(x.std(ddof=1) / math.sqrt(len(x))) if len(x) > 1 else math.nan), len(x)
-
-    usable = [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
-    for point in POINTS:
-        ref = [r for r in usable if r["point"] == point and r["arm"] == REFERENCE_ARM]
-        for arm in ARMS:
-            group = [r for r in usable if r["point"] == point and r["arm"] == arm]
-            ran = [r for r in rows if r["point"] == point and r["arm"] == arm]
-            if not ran:
-                continue
-            cells = []
-            for key in ("mfr", "pd", "coverage"):
-                m, se, _ = stats(group, key)
-                cells.append(f"{m:.4f} ± {se:.4f}" if math.isfinite(se) else f"{m:.4f}")
-            diffs = []
-            for key in ("mfr", "pd"):
-                m, se, n = stats(group, key)
-                mr, ser, nr = stats(ref, key)
-                if n and nr and arm != REFERENCE_ARM:
-                    s = math.sqrt((se if math.isfinite(se) else 0) ** 2 + (ser if math.isfinite(ser) else 0) ** 2)
-                    diffs.append(f"{m - mr:+.4f} ± {s:.4f}")
-                else:
-                    diffs.append("")
-            bond = np.nanmedian([number(r["bond_number"]) for r in ran]) if ran else math.nan
-            cpu = np.nanmedian([number(r["cpu_time"]) for r in ran])
-            flagged = len(ran) - len(group)
-            lines.append(f"| {point} | {arm} | {bond:.2f} | {len(group)}" + (f" (+{flagged} flagged/failed)" if flagged else "")
-                         + f" | {' | '.join(cells)} | {' | '.join(diffs)} | {cpu:.0f} |")
-    return "\n".join(lines) + "\n"
+    return arm_summary(rows, POINTS, ARMS, REFERENCE_ARM,
+                       extra={"Bond": lambda ran: f"{np.nanmedian([number(r['bond_number']) for r in ran]):.2f}"})
 
 
 def density_correction(rows: list[dict]) -> dict:
@@ -181,38 +103,23 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--config", default=str(ROOT / "config.yaml"))
     ap.add_argument("--gamma", type=float, default=1e-4, help="the real surface energy, J/m^2 (default 1e-4)")
-    ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
-    ap.add_argument("--arms", nargs="+", default=DEFAULT_ARMS, choices=list(ARMS))
     ap.add_argument("--rolling-eta", type=float, default=0.25, help="adh_roll_x1000: YADE's eta (default 0.25)")
-    ap.add_argument("--points", nargs="+", default=list(POINTS), choices=list(POINTS))
-    ap.add_argument("--csv", required=True)
-    ap.add_argument("--summary")
-    ap.add_argument("--keep", default="/tmp/adhesion_scaling")
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--summary-only", action="store_true")
     ap.add_argument("--correction", help="write the x1000 -> x10 factor (JSON) here")
+    add_arguments(ap, POINTS, ARMS, DEFAULT_ARMS, "/tmp/adhesion_scaling")
     args = ap.parse_args()
     base = spreadmap_config.load(args.config)
     out = Path(args.csv)
     rows = read_rows(out)
     if not args.summary_only:
-        done = {(r["arm"], r["point"], int(r["seed"])) for r in rows}
         # cheapest first: coarse before fine, x1000 before x10
-        order = sorted(((a, p, s) for a in args.arms for p in args.points for s in args.seeds),
-                       key=lambda j: (-ARMS[j[0]][1], -POINTS[j[1]][1], j[2]))
+        todo = pending(rows, args, lambda j: (-ARMS[j[0]][1], -POINTS[j[1]][1], j[2]))
         jobs = [{"base": base, "arm": a, "point": p, "seed": s, "gamma": args.gamma, "keep": args.keep,
-                 "rolling_eta": args.rolling_eta}
-                for a, p, s in order if (a, p, s) not in done]
-        print(f"{len(jobs)} cases to run ({len(done)} already in {out})", flush=True)
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            futures = {pool.submit(run_one, job): job for job in jobs}
-            for fut in as_completed(futures):
-                row = fut.result()
-                rows.append(row)
-                write_rows(out, rows)
-                print(f"{row['arm']:10s} {row['point']:7s} s{row['seed']} {row.get('status')} mfr {number(row.get('mfr')):.4f} "
-                      f"pd {number(row.get('pd')):.4f} Bo {number(row.get('bond_number')):.2f} cpu {row['cpu_time']:.0f} s "
-                      f"{row.get('flag_reason') or ''}", flush=True)
+                 "rolling_eta": args.rolling_eta} for a, p, s in todo]
+        print(f"{len(jobs)} cases to run ({len(rows)} already in {out})", flush=True)
+        run_jobs(jobs, run_one, rows, out, COLUMNS, workers=args.workers, describe=lambda row: (
+            f"{row['arm']:10s} {row['point']:7s} s{row['seed']} {row.get('status')} mfr {number(row.get('mfr')):.4f} "
+            f"pd {number(row.get('pd')):.4f} Bo {number(row.get('bond_number')):.2f} cpu {row['cpu_time']:.0f} s "
+            f"{row.get('flag_reason') or ''}"))
     text = summary(read_rows(out))
     print(text)
     if args.summary:

@@ -145,6 +145,10 @@ def _check_cross_keys(config: dict) -> None:
             check_sections(config["noise_model"], config.get("noise_calibration"))
         except ValueError as error:
             raise ConfigError(f"config key 'noise_calibration': {error}") from None
+    tails = config["material"]["size_distribution"]["tails"]
+    if not tails[0] < 0.5 < tails[1]:
+        raise ConfigError(f"config key 'material.size_distribution.tails': value {tails} is not allowed; "
+                          f"it must be two volume quantiles [low, high] with low < 0.5 < high (e.g. [0.05, 0.95])")
     named = set(((config.get("points") or {}).get("named") or {}))
     for key in ("cases", "vtk"):
         for name in config["pictures"][key]:

@@ -4,7 +4,8 @@
 # (without an argument the raw result goes to <this script>.raw.json)
 #
 # Protocol (see SPEC.md of spreadmap):
-#   1. settle:  a random loose cloud of equal spheres falls into a box on the floor
+#   1. settle:  a random loose cloud of spheres (of one size, or of a size distribution: psd_sizes)
+#               falls into a box on the floor
 #               (temporary walls at x = 0 and x = pile_length), with NewtonIntegrator
 #               damping switched on only in this phase;
 #   2. relax:   damping off, temporary walls removed, the blade placed with its lower face at
@@ -70,6 +71,9 @@ PARAMS = {
     "progress_every_s": 10.0,
     "surface_energy": 0.0,
     "adhesion_gamma": 0.0,
+    "size_span": 0.0,
+    "psd_sizes": [],
+    "psd_cumulative": [],
     "rolling_resistance": False,
     "rolling_friction": 0.0,
     "rolling_stiffness": 0.0,
@@ -125,12 +129,18 @@ def write_atomically(path, data):
 
 
 # ---- refuse an unstable step before anything runs -------------------------------------------
+# d is the powder's D50 (one size: its diameter); the size distribution, when given, is sieve sizes
+# (diameters) and cumulative volume fractions (spreadmap.case.psd). The critical step is the
+# smallest sphere's.
 R = 0.5 * P["diameter"]
-dt_crit = rayleigh_step(R, P["density"], P["young"], P["poisson"])
+PSD = bool(P.get("psd_sizes"))
+d_min = P["psd_sizes"][0] if PSD else P["diameter"]
+d_max = P["psd_sizes"][-1] if PSD else P["diameter"]
+dt_crit = rayleigh_step(0.5 * d_min, P["density"], P["young"], P["poisson"])
 if P["time_step"] > dt_crit:
     log("REFUSED: time_step %.3e s is above the Rayleigh critical step %.3e s of this case "
-        "(d = %.1f um, density %.0f kg/m3); lower it below the critical step." %
-        (P["time_step"], dt_crit, P["diameter"] * 1e6, P["density"]))
+        "(smallest sphere d = %.1f um, density %.0f kg/m3); lower it below the critical step." %
+        (P["time_step"], dt_crit, d_min * 1e6, P["density"]))
     sys.exit(EXIT_REFUSED)
 
 # ---- geometry ---------------------------------------------------------------------------------
@@ -151,9 +161,7 @@ x_window_end = x_window_start + P["window_travel"]  # reset when the window open
 x_lo = -tb - 20.0 * d                                # modelled length of the floor
 x_hi = x_window_cap + L + P["floor_ahead"] * d
 z_hi = P["cloud_height"] + 40.0 * d
-sphere_volume = math.pi * d ** 3 / 6.0
-mass = P["density"] * sphere_volume
-ke_scale = P["n_particles"] * mass * P["gravity"] * d  # lifting every sphere by one diameter
+sphere_volume = math.pi * d ** 3 / 6.0  # with a size distribution: the placed spheres' mean (below)
 
 O.reset()
 O.dt = P["time_step"]
@@ -235,8 +243,13 @@ temporary_walls = [
 box_ids += temporary_walls
 
 cloud = pack.SpherePack()
-placed = cloud.makeCloud((0, 0, 0), (L, W, P["cloud_height"]), rMean=R, rRelFuzz=0.0,
-                         num=int(P["n_particles"]), seed=int(P["seed"]))
+if PSD:  # YADE's own placer: sizes by volume fraction (distributeMass), the largest placed first
+    placed = cloud.makeCloud((0, 0, 0), (L, W, P["cloud_height"]), psdSizes=list(P["psd_sizes"]),
+                             psdCumm=list(P["psd_cumulative"]), distributeMass=True,
+                             num=int(P["n_particles"]), seed=int(P["seed"]))
+else:
+    placed = cloud.makeCloud((0, 0, 0), (L, W, P["cloud_height"]), rMean=R, rRelFuzz=0.0,
+                             num=int(P["n_particles"]), seed=int(P["seed"]))
 if placed != int(P["n_particles"]):
     log("FAILED: makeCloud placed %d of %d spheres in the cloud box (%.0f um high): the cloud is too dense; "
         "lower the config key scene.cloud_fraction" % (placed, P["n_particles"], P["cloud_height"] * 1e6))
@@ -244,6 +257,38 @@ if placed != int(P["n_particles"]):
 sphere_ids = list(cloud.toSimulation(material=frict))
 for i in sphere_ids:
     O.bodies[i].mask = POWDER_MASK
+if PSD:
+    sphere_volume = sum(4.0 / 3.0 * math.pi * O.bodies[i].shape.radius ** 3 for i in sphere_ids) / len(sphere_ids)
+    smallest_mass = min(O.bodies[i].state.mass for i in sphere_ids)
+    ke_scale = sum(O.bodies[i].state.mass for i in sphere_ids) * P["gravity"] * d  # lifting every sphere by d
+else:
+    smallest_mass = P["density"] * sphere_volume
+    ke_scale = P["n_particles"] * smallest_mass * P["gravity"] * d  # lifting every sphere by one diameter
+# the spheres of the size distribution by number (the fed heap draws from it): each sieve class's
+# volume fraction over its mean sphere volume, cumulated
+psd_classes = []
+if PSD:
+    sizes, fractions = P["psd_sizes"], P["psd_cumulative"]
+    weights = [(fractions[k + 1] - fractions[k]) / (0.5 * (sizes[k] + sizes[k + 1])) ** 3 for k in range(len(sizes) - 1)]
+    total, acc = sum(weights), 0.0
+    for k, w in enumerate(weights):
+        acc += w / total
+        psd_classes.append((acc, sizes[k], sizes[k + 1]))
+
+
+def volume_of(body):
+    """A powder sphere's volume (one size: the same number as sphere_volume, to the bit)."""
+    return 4.0 / 3.0 * math.pi * body.shape.radius ** 3 if PSD else sphere_volume
+
+
+def drawn_radius():
+    """The radius of a sphere added to the fed heap: one size, R; a size distribution, a draw by
+    number (a class by its number weight, then log-uniform within it)."""
+    if not PSD:
+        return R
+    u = feed_rng.random()
+    chosen = next((c for c in psd_classes if u <= c[0]), psd_classes[-1])
+    return 0.5 * chosen[1] * (chosen[2] / chosen[1]) ** feed_rng.random()
 if P["substrate"] == "rough":
     extend_substrate(L + P["substrate_ahead"] * d)
 
@@ -291,7 +336,7 @@ state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": Non
          "peak_overlap_by_phase": {}, "peak_overlap_free": 0.0, "peak_overlap_wedged": 0.0,
          "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start,
          "phase_cost": {}, "phase_mark": None, "frozen": 0, "fed": 0, "feed_after": 0.0}
-single_particle_ke_bound = 0.5 * mass * P["max_speed"] ** 2
+single_particle_ke_bound = 0.5 * smallest_mass * P["max_speed"] ** 2
 feed_rng = random.Random(2000003 * int(P["seed"]) + 29)  # where fed spheres drop (feed_heap)
 
 
@@ -362,7 +407,7 @@ def snapshot():
 def volume_behind(x_rear):
     """Volume passed behind the blade: spheres behind its rear face, plus those removed after
     rolling off the back end of the floor."""
-    return state["removed_behind_volume"] + sum(sphere_volume for b in spheres() if b.state.pos[0] < x_rear)
+    return state["removed_behind_volume"] + sum(volume_of(b) for b in spheres() if b.state.pos[0] < x_rear)
 
 
 def monitor():
@@ -375,7 +420,7 @@ def monitor():
     fallen = [b for b in spheres() if b.state.pos[2] < -2.0 * d]
     for b in fallen:
         if state["blade"] is not None and b.state.pos[0] < blade_rear_x():
-            state["removed_behind_volume"] += sphere_volume
+            state["removed_behind_volume"] += volume_of(b)
         state["rolled_off"] += 1
         sphere_ids.remove(b.id)
         O.bodies.erase(b.id)
@@ -388,11 +433,23 @@ def box_overlap():
     """The largest overlap / R of a sphere against a box: the floor, the side walls, the settle's
     temporary walls, the blade (their contacts only: a few hundred at most, read in Python)."""
     best = 0.0
+    if not PSD:
+        for bid in box_ids:
+            for i in O.bodies[bid].intrs():
+                if i.isReal and i.geom.penetrationDepth > best:
+                    best = i.geom.penetrationDepth
+        return best / R
     for bid in box_ids:
         for i in O.bodies[bid].intrs():
-            if i.isReal and i.geom.penetrationDepth > best:
-                best = i.geom.penetrationDepth
-    return best / R
+            if i.isReal:
+                best = max(best, i.geom.penetrationDepth / radius_of(i))
+    return best
+
+
+def radius_of(i):
+    """The radius of the sphere of a sphere-box interaction."""
+    s1 = O.bodies[i.id1].shape
+    return s1.radius if isinstance(s1, Sphere) else O.bodies[i.id2].shape.radius
 
 
 def record_overlap():
@@ -469,19 +526,27 @@ def applied_adhesion():
     """The adhesion the contact law applies, read off YADE's contacts (not recomputed): the pull-off
     force of a sphere pair (phys.adhesionForce of the first real sphere-sphere contact) and of a
     sphere on a box, and the Bond number, a pair's pull-off over one sphere's weight (simulated
-    mass x gravity: density scaling multiplies both, so it is the real powder's)."""
+    mass x gravity: density scaling multiplies both, so it is the real powder's). With a size
+    distribution, the pair read is whichever touches first: its pull-off is scaled by the reduced
+    radius to a pair of D50 spheres (the law's pull-off is proportional to R*), over a D50 sphere's
+    weight."""
     pair = wall = None
+    pair_radius = None
     for i in O.interactions:
         if not i.isReal:
             continue
         spheres_in = isinstance(O.bodies[i.id1].shape, Sphere) + isinstance(O.bodies[i.id2].shape, Sphere)
         if spheres_in == 2 and pair is None:
             pair = i.phys.adhesionForce
+            r1, r2 = O.bodies[i.id1].shape.radius, O.bodies[i.id2].shape.radius
+            pair_radius = r1 * r2 / (r1 + r2)
         elif spheres_in == 1 and wall is None:
             wall = i.phys.adhesionForce
         if pair is not None and wall is not None:
             break
-    weight = mass * P["gravity"]
+    weight = P["density"] * (math.pi * d ** 3 / 6.0) * P["gravity"]  # a D50 sphere's
+    if PSD and pair is not None:
+        pair *= 0.5 * R / pair_radius
     return {"gamma": P["adhesion_gamma"], "surface_energy": P["surface_energy"], "weight": weight,
             "pair_pull_off": pair, "wall_pull_off": wall,
             "bond_number": None if pair is None else pair / weight}
@@ -583,9 +648,9 @@ def feed_heap(x_rear):
     if deficit < max(1, int(W / d)):  # feed a row's worth at a time
         return
     start = x_rear + tb + P.get("feed_offset", 0.0)
-    pitch = 1.1 * d
-    xs = [start + R + 0.05 * d + i * pitch for i in range(max(1, int((P["feed_zone"] - d) / pitch) + 1))]
-    ys = [R + 0.05 * d + j * pitch for j in range(max(1, int((W - d - 0.1 * d) / pitch) + 1))]
+    pitch = 1.1 * d_max  # the largest sphere's diameter (one size: d)
+    xs = [start + 0.5 * d_max + 0.05 * d_max + i * pitch for i in range(max(1, int((P["feed_zone"] - d_max) / pitch) + 1))]
+    ys = [0.5 * d_max + 0.05 * d_max + j * pitch for j in range(max(1, int((W - d_max - 0.1 * d_max) / pitch) + 1))]
     tops = {x: max([b.state.pos[2] for b in ahead if abs(b.state.pos[0] - x) <= pitch] or [-R]) for x in xs}
     # layers at a time: about what the gap passes while they fall (at h/d 7.5 two layers a call
     # could not keep up: the heap ran down from 1.8 to 1.4 h^2 in the window), the rest at the next call
@@ -596,9 +661,9 @@ def feed_heap(x_rear):
         slots = [(x, y) for x in xs for y in ys]
         feed_rng.shuffle(slots)
         for x, y in slots[:deficit - placed]:
-            centre = (x + feed_rng.uniform(-0.04, 0.04) * d, y + feed_rng.uniform(-0.04, 0.04) * d,
-                      tops[x] + 1.05 * d + layer * pitch)
-            bid = O.bodies.append(utils.sphere(centre, R, material=frict, mask=POWDER_MASK))
+            centre = (x + feed_rng.uniform(-0.04, 0.04) * d_max, y + feed_rng.uniform(-0.04, 0.04) * d_max,
+                      tops[x] + 1.05 * d_max + layer * pitch)
+            bid = O.bodies.append(utils.sphere(centre, drawn_radius(), material=frict, mask=POWDER_MASK))
             O.bodies[bid].state.vel = (P["blade_speed"], 0, 0)
             sphere_ids.append(bid)
             placed += 1
@@ -607,7 +672,7 @@ def feed_heap(x_rear):
     # the next spheres only once these have fallen their 1.05 d (and a layer more): new spheres are
     # placed above the highest ones there, and stacked on spheres still in the air they would build
     # a tower (a smoke case at h/d 7.5 with a deficit of hundreds built one 145 d tall)
-    state["feed_after"] = O.time + math.sqrt(2.0 * (1.05 + layer * 1.1) * d / P["gravity"])
+    state["feed_after"] = O.time + math.sqrt(2.0 * (1.05 + layer * 1.1) * d_max / P["gravity"])
 
 
 def start_phase(name):
@@ -632,7 +697,8 @@ def control():
             for wid in temporary_walls:
                 O.bodies.erase(wid)
                 box_ids.remove(wid)
-            top = max(b.state.pos[2] for b in spheres()) + R
+            top = (max(b.state.pos[2] + b.shape.radius for b in spheres()) if PSD
+                   else max(b.state.pos[2] for b in spheres()) + R)
             state["settled_top"] = top
             z_top = top + 10.0 * d
             state["blade"] = O.bodies.append(utils.box(
@@ -696,8 +762,9 @@ def control():
             % (POINT, phase, O.time, O.iter, total, travel, now - wall_start))
 
 
-log("start: %d spheres d = %.1f um, gap %.1f um, v = %.2f mm/s, f = %.3f, dt = %.3e s (%.3f of Rayleigh %.3e s)"
-    % (P["n_particles"], d * 1e6, h * 1e6, P["blade_speed"] * 1e3, P["friction"], O.dt, O.dt / dt_crit, dt_crit))
+log("start: %d spheres d = %.1f um%s, gap %.1f um, v = %.2f mm/s, f = %.3f, dt = %.3e s (%.3f of Rayleigh %.3e s)"
+    % (P["n_particles"], d * 1e6, " (D50; %.1f-%.1f um, span %.2f)" % (d_min * 1e6, d_max * 1e6, P["size_span"]) if PSD else "",
+       h * 1e6, P["blade_speed"] * 1e3, P["friction"], O.dt, O.dt / dt_crit, dt_crit))
 O.run()
 O.wait()
 

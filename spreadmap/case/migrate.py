@@ -156,14 +156,19 @@ def _rename_case(folder: Path, new: str, dry_run: bool, report: dict) -> bool:
 
 # Scene templates whose cases a later template simulates identically, given the parameters it added:
 # {old template's sha256 (16 hex): (the later template's, the added parameters)}. The template
-# before adhesion (issue 49) and this one with surface energy 0 give the same MFR and PD to the bit
-# (tests/case/test_reproduce_published_yade.py); the change only added adhesion and dropped the
-# monitor's overlap scan (a diagnostic record_overlap makes at every sampled step). 0ae31d5c9de2bce9
-# is this template before a correction of its comments (the main job of 2026-12-06 ran on it). A
-# template change that alters what a case simulates must not be listed here.
+# before adhesion (issue 49) and the later ones with surface energy 0 give the same MFR and PD to the
+# bit (tests/case/test_reproduce_published_yade.py); the adhesion change only added adhesion and
+# dropped the monitor's overlap scan (a diagnostic record_overlap makes at every sampled step).
+# 0ae31d5c9de2bce9 is the adhesion template before a correction of its comments (the main job of
+# 2026-12-06 ran on it), e9640a66ef79dc3a the one after; the size distribution (issue 51) added its
+# parameters, and with a span of 0 (one size) takes the one-size path of the earlier templates to the
+# bit (the same test). A template change that alters what a case simulates must not be listed here.
+ONE_SIZE = {"size_span": 0.0, "psd_sizes": [], "psd_cumulative": []}
+CURRENT_TEMPLATE = "03a2c57411f75bc3"
 EQUIVALENT_TEMPLATES = {
-    "2faa01e6a62c2a28": ("e9640a66ef79dc3a", {"surface_energy": 0.0, "adhesion_gamma": 0.0}),
-    "0ae31d5c9de2bce9": ("e9640a66ef79dc3a", {}),
+    "2faa01e6a62c2a28": (CURRENT_TEMPLATE, {"surface_energy": 0.0, "adhesion_gamma": 0.0, **ONE_SIZE}),
+    "0ae31d5c9de2bce9": (CURRENT_TEMPLATE, ONE_SIZE),
+    "e9640a66ef79dc3a": (CURRENT_TEMPLATE, ONE_SIZE),
 }
 
 

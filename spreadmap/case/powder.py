@@ -46,8 +46,14 @@ def powder_label(config: dict) -> str:
     -------
     str
         'dry spheres (no adhesion)' or 'adhesive spheres (DMT, surface energy 0.1 mJ/m^2; Bond number
-        77 at d = 10 um to 3.1 at 50 um)'.
+        77 at d = 10 um to 3.1 at 50 um)', followed for a size distribution (span > 0) by
+        ', sizes log-normal by volume (span 1, cut at D5-D95; d is the D50)'.
     """
+    material = config["material"]
+    return _adhesion_label(config) + _size_label(material.get("size_distribution") or {})
+
+
+def _adhesion_label(config: dict) -> str:
     material = config["material"]
     gamma = float(material.get("surface_energy_j_m2", 0.0))
     if gamma <= 0.0:
@@ -59,3 +65,14 @@ def powder_label(config: dict) -> str:
 
     return (f"adhesive spheres (DMT, surface energy {gamma * 1e3:.3g} mJ/m^2; Bond number "
             f"{bond(d_range['min']):.2g} at d = {d_range['min']:g} um to {bond(d_range['max']):.2g} at {d_range['max']:g} um)")
+
+
+def _size_label(sizes: dict) -> str:
+    """'' for spheres of one size (a config without a size distribution, or span 0); else the
+    distribution, d being its D50."""
+    span = float(sizes.get("span", 0.0))
+    if span == 0.0:
+        return ""
+    low, high = sizes["tails"]
+    return (f", sizes log-normal by volume (span {span:g}, cut at D{low * 100:g}-D{high * 100:g}; "
+            f"d is the D50)")

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 
+from . import psd
+
 # Densest sphere packing: no solid fraction can exceed it.
 DENSEST_PACKING = math.pi / (3.0 * math.sqrt(2.0))  # 0.7405
 
@@ -133,7 +135,12 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     v = point["v_mm_s"] * 1e-3
     g = material["gravity_m_s2"]
     density = material["density_kg_m3"] * preset["density_scale"]
-    dt, dt_crit = time_step(d, density, material, preset, preset_name)
+    # the size distribution (d is its D50): the step is the smallest sphere's, the cloud's margins
+    # the largest's, and spheres are counted at their mean volume by number (spreadmap.case.psd)
+    sizes = material["size_distribution"]
+    sieves, fractions = psd.sieve_table(d, float(sizes["span"]), sizes["tails"])
+    d_min, d_max = (sieves[0], sieves[-1]) if sieves else (d, d)
+    dt, dt_crit = time_step(d_min, density, material, preset, preset_name)
 
     width = preset["width_d"] * d
     blade = scene["blade_thickness_d"] * d
@@ -144,7 +151,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # The heap ahead of the blade must outlast the window: it holds `heap_reserve` times the most
     # solid the gap can take (a layer of height h at the densest packing) while the blade travels
     # the transient, the window and its own thickness.
-    sphere_volume = math.pi * d ** 3 / 6.0
+    sphere_volume = math.pi * d ** 3 / 6.0 * psd.mean_volume_ratio(float(sizes["span"]), sizes["tails"])
     target = precision_target(preset, config)
     # A fed heap (scene.fed_heap): spheres are added ahead of the blade during the move whenever
     # the heap falls below the standing reserve, so the pile holds only what passes before the
@@ -179,8 +186,8 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))
     # makeCloud keeps sphere centres one radius inside the box: size the cloud on that inner box
     # so that it holds n_particles at `cloud_fraction` (it silently places fewer when too tight).
-    inner = (pile_length - d) * (width - d)
-    cloud_height = n_particles * sphere_volume / (scene["cloud_fraction"] * inner) + d
+    inner = (pile_length - d_max) * (width - d_max)
+    cloud_height = n_particles * sphere_volume / (scene["cloud_fraction"] * inner) + d_max
 
     settle_max = scene["settle_time_factor"] * math.sqrt(2.0 * cloud_height / g)
     relax_max = scene["relax_time_factor"] * math.sqrt(2.0 * pile_height / g)
@@ -197,7 +204,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # the fastest impact expected: the fall of the cloud's top onto the pile, or a sphere thrown
     # ahead of the blade at a few times its speed
     impact_speed = max(math.sqrt(2.0 * g * cloud_height), 4.0 * v)
-    contact = hertz_contact_time(0.5 * d, density, material, impact_speed)
+    contact = hertz_contact_time(0.5 * d_min, density, material, impact_speed)
     surface_energy = float(material.get("surface_energy_j_m2", 0.0))  # 0: dry (configs before adhesion)
     return {
         "case_id": case_id,
@@ -236,6 +243,10 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # as the weight: the Bond number, pull-off / weight, is the real powder's)
         "surface_energy": surface_energy,
         "adhesion_gamma": surface_energy * float(preset["density_scale"]),
+        # the size distribution: sieve sizes [m] and cumulative volume fractions (empty: one size)
+        "size_span": float(sizes["span"]),
+        "psd_sizes": sieves,
+        "psd_cumulative": fractions,
         "rolling_resistance": bool(rolling.get("enabled", False)),
         "rolling_friction": float(rolling.get("rolling_friction", 0.0)),
         "rolling_stiffness": float(rolling.get("stiffness_factor", 0.0)) * k_n * r * r,

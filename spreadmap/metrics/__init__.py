@@ -5,10 +5,11 @@ flow    MFR (volume across the blade's rear plane, exact caps), PD (the study's 
 layer   layer quality: packing within the layer's own thickness, coverage, roughness, thickness
 noise   the case's own noise estimate (counting statistics; batch means within the case)
 regime  the regime rule (scalars or arrays: DEM cases and surrogate predictions alike)
+sizes   the feed's volume quantiles (D10, D50, D90), gap / D90 and the layer's segregation
 case    case_metrics: all of it plus the diagnostics and the stability flags
 geometry  exact sphere / axis-aligned-box intersection volumes (the layer's packing density)
 """
-from .case import MAX_WEDGE_OVERLAP, MIN_HEAP_H2, NEW_COLUMNS, PHASES, SETTING_KEYS, case_metrics, measure
+from .case import MAX_WEDGE_OVERLAP, MIN_HEAP_H2, NEW_COLUMNS, PHASES, SETTING_KEYS, SIZE_COLUMNS, case_metrics, measure
 from .flow import (
     heap_h2,
     heap_volume,
@@ -24,7 +25,8 @@ from .layer import layer_quality, upper_envelope
 from .noise import batch_means_sd, counting_sd, flow_trend
 from .regime import REGIMES, RULE_KEYS, classify, regime_probabilities
 
-__all__ = ["MAX_WEDGE_OVERLAP", "MIN_HEAP_H2", "NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "batch_means_sd",
+__all__ = ["MAX_WEDGE_OVERLAP", "MIN_HEAP_H2", "NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "SIZE_COLUMNS",
+           "batch_means_sd",
            "case_metrics", "classify", "counting_sd", "flow_trend", "heap_h2", "heap_volume",
            "layer_density", "layer_quality", "mass_flow_ratio", "measure", "measured_span", "passed_volume",
            "powder", "regime_probabilities", "sphere_volume", "upper_envelope",

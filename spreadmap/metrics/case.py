@@ -13,6 +13,7 @@ from .flow import heap_h2, layer_density, mass_flow_ratio, measured_span, powder
 from .layer import layer_quality
 from .noise import batch_means_sd, counting_sd, flow_trend
 from .regime import classify
+from .sizes import size_measures
 
 PHASES = ("settle", "relax", "move")  # the phases of the scene, in order (yade_scripts/spreading_case.py)
 
@@ -23,6 +24,8 @@ NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_pa
                "thickness_ratio_sd",
                # the heap ahead of the blade at the window's start and end, in h^2 (issue 32)
                "heap_start_h2", "heap_end_h2")
+# the sizes: the feed's volume quantiles, the gap over D90 and the layer's segregation (issue 51, .sizes)
+SIZE_COLUMNS = ("feed_d10_um", "feed_d50_um", "feed_d90_um", "h_over_d90", "layer_d50_ratio", "layer_d50_ratio_sd")
 # metrics.layer_block_d's default (the schema's): block length (in d) of the layer measures' jackknife noise (.layer)
 LAYER_BLOCK_D = checked("metrics")["layer_block_d"]
 SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batches", "surface_grid_d")
@@ -58,7 +61,13 @@ def measure(raw: dict, settings: dict) -> dict:
     d, gap, width = p["diameter"], p["gap"], p["width"]
     s1 = _powder_snapshot(raw["snapshots"]["window_start"])
     s2 = _powder_snapshot(raw["snapshots"]["window_end"])
-    v_sphere = sphere_volume(d)
+    # spheres are counted at their mean volume: one size, the sphere's; a size distribution, the
+    # mean by number of the pile as the blade starts
+    if p.get("psd_sizes"):
+        _, feed_radii = powder(raw["snapshots"]["blade_start"])
+        v_sphere = float(np.mean(4.0 / 3.0 * math.pi * feed_radii ** 3))
+    else:
+        v_sphere = sphere_volume(d)
     x0, x1 = measured_span(s1, s2, settings["pd_clearance_d"] * d, p["blade_thickness"], diameter=d)
     out = {"mfr": mass_flow_ratio(s1, s2, gap, width)}
     slices = layer_density(s2["positions"], s2["radii"], x0, x1, width, gap, settings["pd_slices"])
@@ -85,6 +94,8 @@ def measure(raw: dict, settings: dict) -> dict:
     # what is left ahead of the blade to feed the flow: a pile that ran down before the window, or
     # is nearly gone at its end, shows here even when the flow has no trend within the window
     out["heap_start_h2"], out["heap_end_h2"] = heap_h2(s1, gap, width), heap_h2(s2, gap, width)
+    if "blade_start" in raw["snapshots"]:
+        out.update(size_measures(_powder_snapshot(raw["snapshots"]["blade_start"]), s2, x0, x1, gap))
     return out
 
 
@@ -170,6 +181,8 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         # number the scene applied (a sphere pair's pull-off over its weight, read off its contacts)
         "surface_energy": p.get("surface_energy", 0.0),
         "bond_number": _applied_bond_number(raw),
+        # the size distribution's span (D90 - D10) / D50 (0: one size; records from before it)
+        "size_span": p.get("size_span", 0.0),
         "steps": raw.get("steps", math.nan), "simulated_time": raw.get("simulated_time", math.nan),
         "wall_time": raw.get("wall_time", math.nan),
         "cpu_time": raw.get("cpu_time", math.nan),
@@ -188,13 +201,13 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         "relaxed_by_time": raw.get("relaxed_by_time"),
         "yade_version": raw.get("yade_version", ""),
     }
-    new = {k: math.nan for k in NEW_COLUMNS}
+    new = {k: math.nan for k in NEW_COLUMNS + SIZE_COLUMNS}
     new.update(overlap_by_cause(raw, out["peak_overlap_ratio"], stability["max_overlap_ratio"]))
     flags = []
     if raw["status"] == "ok":
         measured = measure(raw, settings)
         out.update({k: measured[k] for k in ("mfr", "pd", "pd_cv")})
-        new.update({k: measured[k] for k in NEW_COLUMNS if k in measured})
+        new.update({k: measured[k] for k in NEW_COLUMNS + SIZE_COLUMNS if k in measured})
         out["regime"] = classify(out["mfr"], new["coverage"], new["thickness_ratio"], regime_rules)
         for name in ("mfr", "pd"):
             if not 0.0 <= out[name] <= DENSEST_PACKING:

@@ -13,9 +13,9 @@ POINT = {"f": 0.3, "d_um": 30.0, "h_um": 65.0, "v_mm_s": 10.0}
 
 
 def test_the_listed_equivalence_leads_to_todays_template():
-    """Whoever changes the scene template decides whether the old dry cases still carry over (and
+    """Whoever changes the scene template decides whether the old cases still carry over (and
     updates EQUIVALENT_TEMPLATES): until then this fails."""
-    assert EQUIVALENT_TEMPLATES[OLD][0] == template_sha256()
+    assert all(new == template_sha256() for new, _ in EQUIVALENT_TEMPLATES.values())
 
 
 def old_record(config, tmp_path, point=POINT, template=OLD):
@@ -23,8 +23,9 @@ def old_record(config, tmp_path, point=POINT, template=OLD):
     from spreadmap.case.identity import case_scene
 
     _, params = case_scene(point, "default", config)
-    if template == OLD:
-        params = {k: v for k, v in params.items() if k not in ("surface_energy", "adhesion_gamma")}
+    size_keys = ("size_span", "psd_sizes", "psd_cumulative")  # added by the size distribution (issue 51)
+    dropped = size_keys + (("surface_energy", "adhesion_gamma") if template == OLD else ())
+    params = {k: v for k, v in params.items() if k not in dropped}
     params["scene_sha256"] = template
     old_id = keyed_id(params)
     params["case_id"] = old_id
@@ -65,5 +66,14 @@ def test_an_adhesive_case_of_the_first_adhesive_template_keeps_its_surface_energ
     """The template of the main job of 2026-12-06, before a comment was corrected: its adhesive
     cases carry to the ids today's adhesive default asks for."""
     folder = old_record(config, tmp_path, template="0ae31d5c9de2bce9")
+    report = carry_to_current_template(folder.parent)
+    assert report == {"renamed": [(folder.name, case_id(POINT, "default", config))], "left": []}
+
+
+def test_an_adhesive_case_of_the_template_before_the_size_distribution_gets_todays_one_size_id(config, tmp_path):
+    """The adhesion template as corrected (e9640a66ef79dc3a), before the size distribution: its
+    one-size cases carry to the ids of today's one-size default."""
+    assert config["material"]["size_distribution"]["span"] == 0.0
+    folder = old_record(config, tmp_path, template="e9640a66ef79dc3a")
     report = carry_to_current_template(folder.parent)
     assert report == {"renamed": [(folder.name, case_id(POINT, "default", config))], "left": []}

@@ -25,3 +25,16 @@ def test_the_label_names_the_model_and_its_bond_numbers():
     assert "77 at d = 10 um" in label and "3.1 at 50 um" in label
     assert powder_label({"material": {**MATERIAL, "surface_energy_j_m2": 0.0}}) == "dry spheres (no adhesion)"
     assert powder_label({"material": {"density_kg_m3": 7980.0, "gravity_m_s2": 9.81}}) == "dry spheres (no adhesion)"
+
+
+def test_the_label_names_a_size_distribution_and_not_one_size(config):
+    import copy
+
+    from spreadmap.case.powder import powder_label
+
+    one = copy.deepcopy(config)
+    one["material"]["size_distribution"] = {"span": 0.0, "tails": [0.05, 0.95]}
+    assert "sizes" not in powder_label(one)
+    wide = copy.deepcopy(config)
+    wide["material"]["size_distribution"] = {"span": 1.0, "tails": [0.05, 0.95]}
+    assert powder_label(wide) == powder_label(one) + ", sizes log-normal by volume (span 1, cut at D5-D95; d is the D50)"

@@ -10,7 +10,7 @@ import yaml
 from conftest import ROOT
 
 from spreadmap.config import ConfigError, validate
-from spreadmap.metrics import MIN_HEAP_H2, NEW_COLUMNS, case_metrics, heap_h2, heap_volume, passed_volume
+from spreadmap.metrics import MIN_HEAP_H2, NEW_COLUMNS, SIZE_COLUMNS, case_metrics, heap_h2, heap_volume, passed_volume
 from spreadmap.table import FLOOR_COLUMNS, LAST_COLUMNS, build_table
 
 D = 30e-6  # sphere diameter, m
@@ -127,7 +127,9 @@ def test_case_metrics_reports_the_heap_at_the_windows_start_and_end():
     assert m["heap_start_h2"] == pytest.approx(h2(72), rel=1e-12)  # 2.39 h^2
     assert m["heap_end_h2"] == pytest.approx(h2(36), rel=1e-12)  # 1.21 h^2
     assert not m["flagged"], m["flag_reason"]
-    assert list(m)[-2:] == ["heap_start_h2", "heap_end_h2"] == list(NEW_COLUMNS[-2:])  # appended, last
+    # appended after every older column, the sizes' columns (issue 51) after them
+    tail = list(m)[-len(SIZE_COLUMNS) - 2:]
+    assert tail[:2] == ["heap_start_h2", "heap_end_h2"] == list(NEW_COLUMNS[-2:]) and tail[2:] == list(SIZE_COLUMNS)
 
 
 def test_a_heap_below_the_bound_flags_the_case_naming_the_heap_and_the_bound():

@@ -9,6 +9,7 @@ import pytest
 from spreadmap.metrics import (
     NEW_COLUMNS,
     PHASES,
+    SIZE_COLUMNS,
     batch_means_sd,
     case_metrics,
     classify,
@@ -288,7 +289,7 @@ def test_case_metrics_of_a_clean_two_layer_case():
     assert m["layer_packing"] == pytest.approx(8 / 11, rel=2e-3)
     assert m["thickness_ratio"] == pytest.approx(11 * math.pi / 24 / 2, rel=2e-3)
     assert math.isnan(m["mfr_sd_within"])  # no behind_series in this record
-    assert list(m)[-len(NEW_COLUMNS):] == list(NEW_COLUMNS)  # the new columns come last
+    assert list(m)[-len(NEW_COLUMNS + SIZE_COLUMNS):] == list(NEW_COLUMNS + SIZE_COLUMNS)  # the new columns come last
 
 
 def test_pd_box_ends_a_clearance_behind_the_blade():

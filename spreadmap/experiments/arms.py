@@ -1,0 +1,162 @@
+"""A study in arms: the same design points run under a few variants of the scene (arms), each case
+rendered, run by YADE in its own process (its CPU time its own) and measured, every finished case
+appended at once to a CSV (a run cut short keeps what it finished; a re-run skips what is there),
+and a summary per point and arm against a reference arm.
+
+Used by benchmarks/adhesion_scaling.py (density scaling under adhesion) and benchmarks/psd_cost.py
+(the size distribution's cost and tails).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..case.identity import case_scene
+from ..case.launcher import run_case
+from ..case.render import render
+from ..files import write_text_atomically
+from ..metrics.case import case_metrics
+
+
+def add_arguments(ap: argparse.ArgumentParser, points, arms, default_arms, keep: str) -> None:
+    """The flags every arms study takes: --seeds, --arms, --points, --csv, --summary, --keep,
+    --workers, --summary-only."""
+    ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--arms", nargs="+", default=list(default_arms), choices=list(arms))
+    ap.add_argument("--points", nargs="+", default=list(points), choices=list(points))
+    ap.add_argument("--csv", required=True, help="the cases' table (appended case by case; a re-run skips its cases)")
+    ap.add_argument("--summary", help="write the summary table (markdown) here")
+    ap.add_argument("--keep", default=keep, help="the cases' folders")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--summary-only", action="store_true")
+
+
+def pending(rows: list[dict], args, order_key) -> list[tuple[str, str, int]]:
+    """(arm, point, seed) of the asked cases not in `rows`, sorted by `order_key`."""
+    done = {(r["arm"], r["point"], int(r["seed"])) for r in rows}
+    asked = sorted(((a, p, s) for a in args.arms for p in args.points for s in args.seeds), key=order_key)
+    return [job for job in asked if job not in done]
+
+
+def run_arm_case(cfg: dict, preset: str, point: dict, seed: int, keep: Path | str, columns) -> tuple[dict, dict]:
+    """Render, run and measure one case in its own folder under `keep`.
+
+    Returns
+    -------
+    tuple
+        (row, params): the case's `columns` from its metrics (a case without a raw record: its
+        outcome as status, flagged, the reason), its design point, CPU and wall time; and the
+        parameters the scene received.
+    """
+    cid, params = case_scene(point, preset, cfg, seed)
+    folder = Path(keep) / cid
+    folder.mkdir(parents=True, exist_ok=True)
+    script = folder / "case.py"
+    write_text_atomically(script, render(params))
+    result = run_case(script, folder / "raw.json", folder / "run.log", params["timeout_s"])
+    row = {"case_id": cid, "seed": seed, **{k: point[k] for k in ("f", "d_um", "h_um", "v_mm_s")},
+           "cpu_time": result["cpu_time"], "wall_time": result["wall_time"]}
+    raw_path = folder / "raw.json"
+    if raw_path.exists():
+        out = case_metrics(json.loads(raw_path.read_text()), cfg["regime"], cfg["stability"], cfg["metrics"])
+        row.update({k: out.get(k) for k in columns if k not in row and k in out})
+    else:
+        row.update({"status": result["outcome"], "flagged": True, "flag_reason": result["reason"]})
+    return row, params
+
+
+def read_rows(path: Path | str) -> list[dict]:
+    """The rows of an arms CSV (strings), [] when it does not exist."""
+    path = Path(path)
+    if not path.exists():
+        return []
+    return list(csv.DictReader(io.StringIO(path.read_text())))
+
+
+def write_rows(path: Path | str, rows: list[dict], columns) -> None:
+    """Write the rows (atomically), `columns` in order, other keys left out."""
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=list(columns), extrasaction="ignore")
+    writer.writeheader()
+    writer.writerows(rows)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    write_text_atomically(Path(path), buf.getvalue())
+
+
+def number(x) -> float:
+    """A CSV cell as a float (NaN for an empty or non-numeric one)."""
+    try:
+        return float(x)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def run_jobs(jobs: list[dict], run_one: Callable[[dict], dict], rows: list[dict], out: Path | str, columns,
+             describe: Callable[[dict], str], workers: int = 2) -> list[dict]:
+    """Run `jobs` (each `run_one(job)` gives a row) `workers` at a time, appending each finished row to
+    `rows` and writing them all to `out` at once; prints `describe(row)` per case."""
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = {pool.submit(run_one, job): job for job in jobs}
+        for fut in as_completed(futures):
+            row = fut.result()
+            rows.append(row)
+            write_rows(out, rows, columns)
+            print(describe(row), flush=True)
+    return rows
+
+
+def mean_se(group: list[dict], key: str) -> tuple[float, float, int]:
+    """Mean of a column over rows, its SE from their spread (NaN with one row), and the count."""
+    x = np.array([number(r.get(key)) for r in group])
+    x = x[np.isfinite(x)]
+    if len(x) == 0:
+        return math.nan, math.nan, 0
+    return float(x.mean()), (float(x.std(ddof=1) / math.sqrt(len(x))) if len(x) > 1 else math.nan), len(x)
+
+
+def usable(rows: list[dict]) -> list[dict]:
+    """Rows of cases that finished and were not flagged."""
+    return [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
+
+
+def arm_summary(rows: list[dict], points, arms, reference: str, keys=("mfr", "pd", "coverage"),
+                differences=("mfr", "pd"), extra: dict[str, Callable[[list[dict]], str]] | None = None) -> str:
+    """A markdown table per point and arm: each of `keys` (mean of the seeds ± SE from their spread),
+    the difference of each of `differences` from the `reference` arm ± SE, the CPU per case (median),
+    and `extra` columns (header -> function of the arm's rows at the point, flagged included)."""
+    extra = extra or {}
+    header = (["point", "arm", *extra, "seeds", *keys, *[f"{k} - {reference}" for k in differences], "CPU s (median)"])
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    good = usable(rows)
+    for point in points:
+        ref = [r for r in good if r["point"] == point and r["arm"] == reference]
+        for arm in arms:
+            ran = [r for r in rows if r["point"] == point and r["arm"] == arm]
+            if not ran:
+                continue
+            group = [r for r in good if r["point"] == point and r["arm"] == arm]
+            cells = []
+            for key in keys:
+                m, se, _ = mean_se(group, key)
+                cells.append(f"{m:.4f} ± {se:.4f}" if math.isfinite(se) else f"{m:.4f}")
+            for key in differences:
+                m, se, n = mean_se(group, key)
+                mr, ser, nr = mean_se(ref, key)
+                if n and nr and arm != reference:
+                    s = math.sqrt((se if math.isfinite(se) else 0) ** 2 + (ser if math.isfinite(ser) else 0) ** 2)
+                    cells.append(f"{m - mr:+.4f} ± {s:.4f}")
+                else:
+                    cells.append("")
+            flagged = len(ran) - len(group)
+            seeds = f"{len(group)}" + (f" (+{flagged} flagged/failed)" if flagged else "")
+            cpu = np.nanmedian([number(r["cpu_time"]) for r in ran])
+            lines.append("| " + " | ".join([point, arm, *[fn(ran) for fn in extra.values()], seeds, *cells, f"{cpu:.0f}"]) + " |")
+    return "\n".join(lines) + "\n"
