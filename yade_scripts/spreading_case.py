@@ -214,19 +214,22 @@ elif P["substrate"] != "flat":
 def extend_substrate(x_to):
     """Lay the rough substrate up to x_to (never beyond the floor's end). A sphere of the powder that
     rolled beyond the substrate's end lies on the floor below it, where the next substrate spheres
-    go: no substrate sphere is laid within 2 R of one (the random depth is drawn all the same, so
-    the layout never depends on where the powder is)."""
+    go: no substrate sphere is laid within 2 R of one (R + its radius with a size distribution; the
+    random depth is drawn all the same, so the layout never depends on where the powder is)."""
     x_to = min(x_to, x_hi)
     while substrate["x_end"] < x_to:
         chunk_end = substrate["x_end"] + 10.0 * d
-        nearby = [b.state.pos for b in (O.bodies[i] for i in sphere_ids) if substrate["x_end"] - d <= b.state.pos[0] <= chunk_end + d
-                  and b.state.pos[2] < R]
+        reach = 2.0 * d_max if PSD else d
+        nearby = [(b.state.pos, b.shape.radius) for b in (O.bodies[i] for i in sphere_ids)
+                  if substrate["x_end"] - reach <= b.state.pos[0] <= chunk_end + reach
+                  and (b.state.pos[2] - b.shape.radius < 0.0 if PSD else b.state.pos[2] < R)]
         for row in substrate["rows"]:
             while row[1] < chunk_end:
                 zc = -R - substrate_rng.uniform(0.0, P["substrate_jitter"] * R)
                 centre = (row[1], row[0], zc)
-                if not any((p[0] - centre[0]) ** 2 + (p[1] - centre[1]) ** 2 + (p[2] - zc) ** 2 < (2.0 * R) ** 2
-                           for p in nearby):
+                # (one size: 2 R; a size distribution: R + the powder sphere's radius)
+                if not any((p[0] - centre[0]) ** 2 + (p[1] - centre[1]) ** 2 + (p[2] - zc) ** 2
+                           < ((R + r) if PSD else 2.0 * R) ** 2 for p, r in nearby):
                     substrate["ids"].append(
                         O.bodies.append(utils.sphere(centre, R, fixed=True, material=frict, mask=SUBSTRATE_MASK)))
                     substrate["positions"].append(list(centre))
