@@ -19,12 +19,9 @@ from pathlib import Path
 
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from spreadmap.experiments.cost_study import METHODS, cpu_needed, summarise  # noqa: E402
-from spreadmap.experiments.noisy_study import run  # noqa: E402
-from spreadmap.files import write_text_atomically  # noqa: E402
+from spreadmap.experiments.cost_study import METHODS, cpu_needed, summarise
+from spreadmap.experiments.noisy_study import run
+from spreadmap.files import write_text_atomically
 
 
 def main(argv=None) -> int:

@@ -19,11 +19,8 @@ from pathlib import Path
 
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from spreadmap.experiments.noisy_study import NOISE_MODELS, cases_needed, rmse_summary, run, summarise  # noqa: E402
-from spreadmap.files import write_text_atomically  # noqa: E402
+from spreadmap.experiments.noisy_study import NOISE_MODELS, cases_needed, rmse_summary, run, summarise
+from spreadmap.files import write_text_atomically
 
 
 def main(argv=None) -> int:

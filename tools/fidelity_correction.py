@@ -19,13 +19,12 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from spreadmap.case.substrate import floor_label, floor_of
+from spreadmap.config import load
+from spreadmap.fidelity.correction import config_block, correction, pairs
+from spreadmap.fidelity.plots import correction_figure
 
-from spreadmap.case.substrate import floor_label, floor_of  # noqa: E402
-from spreadmap.config import load  # noqa: E402
-from spreadmap.fidelity.correction import config_block, correction, pairs  # noqa: E402
-from spreadmap.fidelity.plots import correction_figure  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def main(argv=None) -> int:

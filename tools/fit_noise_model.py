@@ -16,23 +16,21 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import yaml
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from spreadmap import config as spreadmap_config
+from spreadmap.case.substrate import floor_label
+from spreadmap.metrics.noise import calibration_factors
+from spreadmap.noise_law.cells import OTHER_ARMS, published_cells
+from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval
+from spreadmap.noise_law.heldout import leave_point_out, predictive_check, scored
+from spreadmap.noise_law.plot import law_figure
 
-from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.case.substrate import floor_label  # noqa: E402
-from spreadmap.metrics.noise import calibration_factors  # noqa: E402
-from spreadmap.noise_law.cells import OTHER_ARMS, published_cells  # noqa: E402
-from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval  # noqa: E402
-from spreadmap.noise_law.heldout import leave_point_out, predictive_check, scored  # noqa: E402
-from spreadmap.noise_law.plot import law_figure  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 TARGETS = ("mfr", "pd")
 BANDS = ((0.0, 2.0, "h/d < 2"), (2.0, 3.0, "2 <= h/d < 3"), (3.0, math.inf, "h/d >= 3"))

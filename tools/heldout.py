@@ -20,11 +20,6 @@ import json
 import sys
 from pathlib import Path
 
-try:
-    import spreadmap  # noqa: F401
-except ImportError:  # not installed: use the checkout
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 import pandas as pd
 
 from spreadmap import config as spreadmap_config
