@@ -39,7 +39,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-from spreadmap.machine import description_lines
+from spreadmap.host import description_lines
 
 ROOT = Path(__file__).resolve().parent.parent
 

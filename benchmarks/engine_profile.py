@@ -22,7 +22,7 @@ import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from spreadmap.machine import description_lines
+from spreadmap.host import description_lines
 
 ROOT = Path(__file__).resolve().parent.parent
 

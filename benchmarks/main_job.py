@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 
 from spreadmap.dryrun import planned_jobs
-from spreadmap.machine import description_lines
+from spreadmap.host import description_lines
 
 ROOT = Path(__file__).resolve().parent.parent
 WORKFLOW_FILES = ["Snakefile", "config.yaml", "rules", "scripts", "yade_scripts", "schemas", "profiles", "envs"]

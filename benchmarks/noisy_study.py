@@ -44,7 +44,7 @@ def main(argv=None) -> int:
     write_text_atomically(out / "noisy_study_summary.csv", summ.to_csv(index=False))
     rs = rmse_summary(table)
     write_text_atomically(out / "noisy_study_rmse.csv", rs.to_csv(index=False))
-    from spreadmap.experiments.plots import plot_noisy_study
+    from spreadmap.experiments.experiment_plots import plot_noisy_study
     plot_noisy_study(table, summ, rs, out / "noisy_study")
     meta = {"command": "benchmarks/noisy_study.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0,

@@ -551,7 +551,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     ARMS["today"]["rev"] = args.today_rev
     from spreadmap import config as cfgmod
-    from spreadmap.machine import description_lines
+    from spreadmap.host import description_lines
 
     config = cfgmod.load(ROOT / "config.yaml")
     print("\n".join(description_lines()), flush=True)

@@ -23,7 +23,7 @@ import time
 import warnings
 from pathlib import Path
 
-from spreadmap.machine import description_lines
+from spreadmap.host import description_lines
 
 ROOT = Path(__file__).resolve().parent.parent
 

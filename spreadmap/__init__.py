@@ -41,11 +41,11 @@ Where each concept is held (one module each):
   ``schema.checked``: one section checked alone, defaults filled); loading a whole config:
   ``config`` (load: the schema's defaults filled, then the cross-key checks)
 * noise model: ``noise_law`` (config ``noise_model``: ``fit``, ``apply``); a case's own estimate:
-  ``metrics.noise``; a new run's SD at a point: ``surrogate.noise``
+  ``metrics.noise``; a new run's SD at a point: ``surrogate.noise_sd``
 * the loop: ``loop.stepper`` (one step; its criteria ``loop.map_criteria``)
 * the study rule: ``study_rule.rule``
 * the experiments: ``experiments`` (``replay``, ``sampling_study``, ``noisy_study``, ``cost_study``)
-* fidelity: ``fidelity`` (``plan``, ``study``, ``plots``)
+* fidelity: ``fidelity`` (``plan``, ``study``, ``paired_factor``, ``fidelity_plots``)
 * surrogate: ``surrogate`` (``fitting``, ``prediction``); maps: ``maps``; decisions:
   ``decisions``; metrics: ``metrics`` (``case.case_metrics``); sensitivity: ``sensitivity``
 """

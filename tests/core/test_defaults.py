@@ -106,14 +106,14 @@ import spreadmap.schema
 spreadmap.schema.SCHEMA = Path(sys.argv[1])  # before any module reads it
 from spreadmap.loop import cost, stepper
 from spreadmap.loop.map_criteria import map_grids
-from spreadmap.maps import grids, machine, powder, regimes
+from spreadmap.maps import grids, machine, powder_maps, regimes
 from spreadmap.metrics import case
 from spreadmap.noise_law import apply
 from spreadmap.study_rule.rule import DEFAULT_TOLERANCE
 default = lambda f, name: inspect.signature(f).parameters[name].default
 print(json.dumps({
     "tolerance": DEFAULT_TOLERANCE, "stepper_tolerance": default(stepper.step, "tolerance"),
-    "band_h": default(powder.powder_band_map, "h_um"), "cluster_v": default(powder.powder_cluster_map, "v_mm_s"),
+    "band_h": default(powder_maps.powder_band_map, "h_um"), "cluster_v": default(powder_maps.powder_cluster_map, "v_mm_s"),
     "machine_f": default(machine.machine_map, "f"), "machine_n_h": default(machine.machine_map, "n_h"),
     "plane_v": default(regimes.regime_overlay, "v_mm_s"),
     "support": getattr(grids, "MAP_DEFAULTS", {}).get("support", {}).get("max_distance"),
