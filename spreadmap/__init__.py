@@ -38,7 +38,7 @@ Where each concept is held (one module each):
 * atomic writing: ``files`` (write_text_atomically, atomic_path); reading the workflow's files
   without taking a damaged one for data: ``records``
 * config defaults: ``schema`` (schemas/config.schema.yaml, the one place a default is stated;
-  ``schema.checked``: one section checked alone, defaults filled); loading a whole config:
+  ``schema.checked``: one section, or an object inside one, checked alone, defaults filled); loading a whole config:
   ``config`` (load: the schema's defaults filled, then the cross-key checks)
 * noise model: ``noise_law`` (config ``noise_model``: ``fit``, ``apply``); a case's own estimate:
   ``metrics.noise``; a new run's SD at a point: ``surrogate.noise_sd``
