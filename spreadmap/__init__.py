@@ -26,8 +26,8 @@ Rooms (sub-packages), one job each:
 Where each concept is held (one module each):
 
 * case identity, content keys: ``case.identity`` (case_scene, case_id, content_key); a case's
-  scene: ``case.scene``; its script: ``case.render``; its run: ``case.launcher``; its floor:
-  ``case.substrate``
+  scene: ``case.scene``; its script: ``case.render``; its run: ``case.launcher``; a failed one
+  retried: ``case.retry``; its floor: ``case.substrate``
 * the published study: ``study`` (``cases``, ``summary``, ``restore``, ``checksums``)
 * design space: ``design.Design``, built once from the config (``Design.from_config``): names,
   ranges, to / from the unit cube, axes; h/d (``design.h_over_d``); every ``ranges`` argument takes it
