@@ -84,10 +84,10 @@ def summary(rows: list[dict]) -> str:
 
 def density_correction(rows: list[dict]) -> dict:
     """The factor from density x1000 to x10 under adhesion, per target, with its SD at a point not
-    run: spreadmap.fidelity.correction on the arms' pairs (a point and a seed at both arms)."""
+    run: spreadmap.fidelity.paired_factor on the arms' pairs (a point and a seed at both arms)."""
     import pandas as pd
 
-    from spreadmap.fidelity.correction import config_block, correction
+    from spreadmap.fidelity.paired_factor import config_block, correction
 
     table = pd.DataFrame(rows).rename(columns={"arm": "preset", "point": "name"})
     for column in ("seed", "f", "d_um", "h_um", "v_mm_s", "mfr", "pd", "mfr_sd", "pd_sd", "cpu_time"):

@@ -39,11 +39,9 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from spreadmap.host import description_lines
 
-from spreadmap.machine import description_lines  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 CSV_COLUMNS = ["preset", "point", "seed", "case_id", "outcome", "status", "reason", "n_particles", "steps",
                "estimated_steps", "wall_time", "cpu_time", "particle_steps_per_cpu_s", "mfr", "pd", "regime",

@@ -34,10 +34,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from spreadmap.loop.cost import DEFAULT_LAW
 
-from spreadmap.loop.cost import DEFAULT_LAW  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 NAMES = ("f", "d_um", "h_um", "v_mm_s")
 

@@ -19,12 +19,9 @@ from pathlib import Path
 
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from spreadmap.experiments.cost_study import METHODS, cpu_needed, summarise  # noqa: E402
-from spreadmap.experiments.noisy_study import run  # noqa: E402
-from spreadmap.files import write_text_atomically  # noqa: E402
+from spreadmap.experiments.cost_study import METHODS, cpu_needed, summarise
+from spreadmap.experiments.noisy_study import run
+from spreadmap.files import write_text_atomically
 
 
 def main(argv=None) -> int:
@@ -46,7 +43,7 @@ def main(argv=None) -> int:
     write_text_atomically(out / "cost_study_needed.csv", needed.to_csv(index=False))
     summary = summarise(needed)
     write_text_atomically(out / "cost_study_summary.csv", summary.to_csv(index=False))
-    from spreadmap.experiments.plots import plot_cost_study
+    from spreadmap.experiments.experiment_plots import plot_cost_study
     plot_cost_study(table, args.targets, out / "cost_study")
     meta = {"command": "benchmarks/cost_study.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0, "seeds": args.seeds,

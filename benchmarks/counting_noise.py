@@ -27,15 +27,13 @@ import math
 import sys
 from pathlib import Path
 
+import pandas as pd
+from scipy import stats
+
+from spreadmap import config as spreadmap_config
+from spreadmap.noise_law.counting import counting_constant, pooled_constant
+
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-import pandas as pd  # noqa: E402
-from scipy import stats  # noqa: E402
-
-from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.noise_law.counting import counting_constant, pooled_constant  # noqa: E402
 
 
 def main(argv=None) -> int:

@@ -22,11 +22,9 @@ import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from spreadmap.host import description_lines
 
-from spreadmap.machine import description_lines  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 POINTS = {
     "corner": {"f": 0.30, "d_um": 10, "h_um": 75, "v_mm_s": 10},   # h/d 7.5: the study's costliest cases

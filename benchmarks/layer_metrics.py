@@ -16,15 +16,13 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
+
+from spreadmap import config as spreadmap_config
+from spreadmap.metrics import case_metrics, layer_density, powder, sphere_volume
+
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-
-from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.metrics import case_metrics, layer_density, powder, sphere_volume  # noqa: E402
 
 OLD_RULE = {"jam_mfr_max": 0.05, "short_feed_pd_min": 0.20, "short_feed_cv_max": 0.35, "pd_slices": 4}
 

@@ -18,17 +18,15 @@ import re
 import sys
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from spreadmap import config as spreadmap_config
+from spreadmap.case.identity import repeat_group
+from spreadmap.metrics import measure
+
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
-
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
-from scipy import stats  # noqa: E402
-
-from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.case.identity import repeat_group  # noqa: E402
-from spreadmap.metrics import measure  # noqa: E402
 
 MEASURES = ("mfr", "pd", "layer_packing", "coverage", "roughness_d", "thickness_ratio")
 

@@ -31,16 +31,12 @@ import tempfile
 import time
 from pathlib import Path
 
+from spreadmap.dryrun import planned_jobs
+from spreadmap.host import description_lines
+
 ROOT = Path(__file__).resolve().parent.parent
 WORKFLOW_FILES = ["Snakefile", "config.yaml", "rules", "scripts", "yade_scripts", "schemas", "profiles", "envs"]
 SNAKEMAKE = Path(sys.executable).parent / "snakemake"
-for _path in (ROOT, ROOT / "tests"):  # the package, and the tests' reader of dry runs
-    if str(_path) not in sys.path:
-        sys.path.insert(0, str(_path))
-
-from dryrun import planned_jobs  # noqa: E402
-
-from spreadmap.machine import description_lines  # noqa: E402
 
 PROGRESS = re.compile(r"^\d+ of \d+ steps \(.*\) done")
 

@@ -19,11 +19,8 @@ from pathlib import Path
 
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from spreadmap.experiments.noisy_study import NOISE_MODELS, cases_needed, rmse_summary, run, summarise  # noqa: E402
-from spreadmap.files import write_text_atomically  # noqa: E402
+from spreadmap.experiments.noisy_study import NOISE_MODELS, cases_needed, rmse_summary, run, summarise
+from spreadmap.files import write_text_atomically
 
 
 def main(argv=None) -> int:
@@ -47,7 +44,7 @@ def main(argv=None) -> int:
     write_text_atomically(out / "noisy_study_summary.csv", summ.to_csv(index=False))
     rs = rmse_summary(table)
     write_text_atomically(out / "noisy_study_rmse.csv", rs.to_csv(index=False))
-    from spreadmap.experiments.plots import plot_noisy_study
+    from spreadmap.experiments.experiment_plots import plot_noisy_study
     plot_noisy_study(table, summ, rs, out / "noisy_study")
     meta = {"command": "benchmarks/noisy_study.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0,

@@ -16,8 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from spreadmap.case.identity import repeat_group  # noqa: E402
+from spreadmap.case.identity import repeat_group
 
 PHASES = ("settle", "relax", "approach", "window")
 

@@ -45,11 +45,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from spreadmap.study.checksums import republish_if_listed, verified_bytes
 
-from spreadmap.study.checksums import republish_if_listed, verified_bytes  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 POINTS = {  # f, d_um, h_um, v_mm_s: the four fidelity points, the two corners, two more
     "normal": (0.30, 30, 65, 10),
@@ -553,7 +551,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     ARMS["today"]["rev"] = args.today_rev
     from spreadmap import config as cfgmod
-    from spreadmap.machine import description_lines
+    from spreadmap.host import description_lines
 
     config = cfgmod.load(ROOT / "config.yaml")
     print("\n".join(description_lines()), flush=True)

@@ -23,14 +23,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from spreadmap.config import load
+from spreadmap.experiments import replay
+from spreadmap.files import atomic_path, write_text_atomically
+from spreadmap.loop.cost import fit_law
+from spreadmap.noise_law.apply import case_noise
 
-from spreadmap.config import load  # noqa: E402
-from spreadmap.experiments import replay  # noqa: E402
-from spreadmap.files import atomic_path, write_text_atomically  # noqa: E402
-from spreadmap.loop.cost import fit_law  # noqa: E402
-from spreadmap.noise_law.apply import case_noise  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 PUBLISHED = ["cases_converge.csv", "cases_lds.csv", "cases_lattice.csv", "cases_heldout.csv", "cases_heldout2.csv"]
 _WORLD = None

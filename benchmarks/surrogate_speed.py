@@ -23,11 +23,9 @@ import time
 import warnings
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from spreadmap.host import description_lines
 
-from spreadmap.machine import description_lines  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def timed(fn, repeat: int) -> list[float]:

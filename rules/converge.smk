@@ -13,7 +13,7 @@ checkpoint converge_step:
     params:
         converge=GROW,
         tolerance=CONV["tolerance"],
-        floors=CONV.get("floors"),  # optional: absent, the study's floors (spreadmap.study_rule.rule.DEFAULT_FLOORS)
+        floors=CONV["floors"],
         ranges=RANGES,
         maps=config["maps"],
         lds_seed=SWEEPS["lds"]["seed"] if "lds" in SWEEPS else None,  # no LDS sweep: no LDS sequence to start from

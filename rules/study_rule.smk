@@ -13,7 +13,7 @@ rule convergence:
     params:
         partitions=SWEEPS["lds"]["partitions"] if "lds" in SWEEPS else [],  # no LDS sweep: no partitions
         tolerance=CONV["tolerance"],
-        floors=CONV.get("floors"),  # optional: absent, the study's floors (spreadmap.study_rule.rule.DEFAULT_FLOORS)
+        floors=CONV["floors"],
         window=CONV["window"],
         floor=FLOOR,
     log:
@@ -38,7 +38,7 @@ rule sampling_study:
     params:
         study=CONV["sampling_study"],
         tolerance=CONV["tolerance"],
-        floors=CONV.get("floors"),  # optional, as above
+        floors=CONV["floors"],
         ranges=RANGES,
     log:
         "logs/sampling_study.log",

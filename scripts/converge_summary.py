@@ -3,7 +3,7 @@ import json
 
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
-from spreadmap.loop.plots import plot_converge_path
+from spreadmap.loop.loop_plot import plot_converge_path
 
 log_to(snakemake)  # noqa: F821
 

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from spreadmap.fidelity import plots, study
+from spreadmap.fidelity import fidelity_plots, study
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
@@ -25,7 +25,7 @@ summary = {"reference": reference, "presets": presets.to_dict("records"), "goals
            "machine": study.machine_description(cases)}
 write_text_atomically(sm.output.summary, json.dumps(summary, indent=1, default=float))
 write_text_atomically(sm.output.markdown, study.markdown_summary(presets, per_point, knobs, reference, goals))
-plots.pareto_figure(presets, reference, Path(sm.output.pareto).with_suffix(""))
+fidelity_plots.pareto_figure(presets, reference, Path(sm.output.pareto).with_suffix(""))
 if knobs is not None:
-    plots.knobs_figure(knobs, sm.params.knob_preset, Path(sm.output.knobs_figure).with_suffix(""))
+    fidelity_plots.knobs_figure(knobs, sm.params.knob_preset, Path(sm.output.knobs_figure).with_suffix(""))
 print(Path(sm.output.markdown).read_text())

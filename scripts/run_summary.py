@@ -5,7 +5,7 @@ from pathlib import Path
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
-from spreadmap.summary import run_summary, summary_text
+from spreadmap.run_report import run_summary, summary_text
 
 log_to(snakemake)  # noqa: F821
 

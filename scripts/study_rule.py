@@ -9,7 +9,7 @@ from spreadmap.design import TARGETS
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.records import read_table
-from spreadmap.study_rule import plots
+from spreadmap.study_rule import rule_plots
 from spreadmap.table import usable
 
 log_to(snakemake)  # noqa: F821
@@ -26,7 +26,7 @@ for name, table in tables.items():
                                 partition_col=partition_col)
     frames.append(conv.assign(sweep=name))
     verdicts[name] = conv
-    long.append(plots.partition_values(table, name, TARGETS, partitions=partitions, partition_col=partition_col))
+    long.append(rule_plots.partition_values(table, name, TARGETS, partitions=partitions, partition_col=partition_col))
 write_text_atomically(sm.output.partitions, pd.concat(frames, ignore_index=True).to_csv(index=False))
 
 lds = tables["lds"][usable(tables["lds"])].sort_values("index")
@@ -38,9 +38,9 @@ summary["lds_case_by_case"] = stable
 summary["note"] = ("partitions: converged at the first N where all five statistics of MFR and PD change by less "
                    "than the tolerance from the previous partition; case by case: see lds_case_by_case")
 write_text_atomically(sm.output.summary, json.dumps(summary, indent=1, default=str))
-plots.plot_distributions(pd.concat(long, ignore_index=True), out / "distributions", TARGETS, floor=p.floor)
+rule_plots.plot_distributions(pd.concat(long, ignore_index=True), out / "distributions", TARGETS, floor=p.floor)
 sweeps_stats = {name: conv for name, conv in verdicts.items()}
 sweeps_stats["lds case by case"] = running
-plots.plot_statistics(sweeps_stats, out / "statistics", TARGETS, tolerance=p.tolerance, floors=p.floors,
+rule_plots.plot_statistics(sweeps_stats, out / "statistics", TARGETS, tolerance=p.tolerance, floors=p.floors,
                       floor=p.floor)
 print(json.dumps(summary, indent=1, default=str))

@@ -26,8 +26,8 @@ Rooms (sub-packages), one job each:
 Where each concept is held (one module each):
 
 * case identity, content keys: ``case.identity`` (case_scene, case_id, content_key); a case's
-  scene: ``case.scene``; its script: ``case.render``; its run: ``case.launcher``; its floor:
-  ``case.substrate``
+  scene: ``case.scene``; its script: ``case.render``; its run: ``case.launcher``; a failed one
+  retried: ``case.retry``; its floor: ``case.substrate``
 * the published study: ``study`` (``cases``, ``summary``, ``restore``, ``checksums``)
 * design space: ``design.Design``, built once from the config (``Design.from_config``): names,
   ranges, to / from the unit cube, axes; h/d (``design.h_over_d``); every ``ranges`` argument takes it
@@ -38,14 +38,14 @@ Where each concept is held (one module each):
 * atomic writing: ``files`` (write_text_atomically, atomic_path); reading the workflow's files
   without taking a damaged one for data: ``records``
 * config defaults: ``schema`` (schemas/config.schema.yaml, the one place a default is stated;
-  ``schema.checked``: one section checked alone, defaults filled); loading a whole config:
+  ``schema.checked``: one section, or an object inside one, checked alone, defaults filled); loading a whole config:
   ``config`` (load: the schema's defaults filled, then the cross-key checks)
 * noise model: ``noise_law`` (config ``noise_model``: ``fit``, ``apply``); a case's own estimate:
-  ``metrics.noise``; a new run's SD at a point: ``surrogate.noise``
+  ``metrics.noise``; a new run's SD at a point: ``surrogate.noise_sd``
 * the loop: ``loop.stepper`` (one step; its criteria ``loop.map_criteria``)
 * the study rule: ``study_rule.rule``
 * the experiments: ``experiments`` (``replay``, ``sampling_study``, ``noisy_study``, ``cost_study``)
-* fidelity: ``fidelity`` (``plan``, ``study``, ``plots``)
+* fidelity: ``fidelity`` (``plan``, ``study``, ``paired_factor``, ``fidelity_plots``)
 * surrogate: ``surrogate`` (``fitting``, ``prediction``); maps: ``maps``; decisions:
   ``decisions``; metrics: ``metrics`` (``case.case_metrics``); sensitivity: ``sensitivity``
 """

@@ -161,7 +161,7 @@ def _check_cross_keys(config: dict) -> None:
         make_config(config["surrogate"])
     except (ValueError, KeyError) as error:
         raise ConfigError(f"config key 'surrogate': {error}") from None
-    from .decisions.settings import problems as decision_problems
+    from .decisions.config_section import problems as decision_problems
 
     for problem in decision_problems(config):
         raise ConfigError(problem)

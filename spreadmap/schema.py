@@ -21,12 +21,13 @@ SCHEMA = Path(__file__).resolve().parent.parent / "schemas" / "config.schema.yam
 
 @lru_cache(maxsize=None)
 def section_schema(name: str) -> dict:
-    """The JSON schema of one top-level config section (read once; do not modify it).
+    """The JSON schema of one config section (read once; do not modify it).
 
     Parameters
     ----------
     name : str
-        The section (a top-level key of schemas/config.schema.yaml, e.g. "maps").
+        The section: a top-level key of schemas/config.schema.yaml (e.g. "maps"), or a dotted path
+        to an object inside one (e.g. "scene.substrate").
 
     Returns
     -------
@@ -38,7 +39,9 @@ def section_schema(name: str) -> dict:
     KeyError
         If the schema has no such section.
     """
-    return yaml.safe_load(SCHEMA.read_text())["properties"][name]
+    head, _, rest = name.rpartition(".")
+    parent = section_schema(head) if head else yaml.safe_load(SCHEMA.read_text())
+    return parent["properties"][rest]
 
 
 def _fill_defaults(schema: dict, value: dict) -> dict:
@@ -59,7 +62,8 @@ def checked(name: str, section: Mapping | None = None) -> dict:
     Parameters
     ----------
     name : str
-        The section (a top-level key of the schema).
+        The section: a top-level key of the schema, or a dotted path to an object inside one
+        (e.g. "scene.substrate", for code handed that part of a config).
     section : Mapping or None, optional
         The section's values; {} or None: the defaults alone. Not modified.
 

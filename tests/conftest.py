@@ -3,18 +3,19 @@
 from __future__ import annotations
 
 import copy
+import importlib.util
 import json
 import math
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
-from dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 
 from spreadmap import config as spreadmap_config
 from spreadmap.case.identity import case_scene
 from spreadmap.case.launcher import run_case
 from spreadmap.case.render import render
+from spreadmap.dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 from spreadmap.files import write_text_atomically
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -23,6 +24,16 @@ ROOT = Path(__file__).resolve().parent.parent
 @pytest.fixture(scope="session")
 def config() -> dict:
     return spreadmap_config.load(ROOT / "config.yaml")
+
+
+def script_module(relative: str):
+    """A script of the checkout that is not in the package (tools/, benchmarks/), loaded as a module
+    from its file: `relative` to the checkout's root, e.g. "tools/recheck_stop.py"."""
+    path = ROOT / relative
+    spec = importlib.util.spec_from_file_location(path.stem, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def run_scene(params: dict, workdir: Path) -> tuple[dict, dict]:

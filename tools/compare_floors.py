@@ -24,15 +24,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from spreadmap.case.substrate import FLAT, ROUGH, floor_label, floor_of, mean_hollow_depth
+from spreadmap.config import load
+from spreadmap.maps.floors import box_sample, by_band, compare
+from spreadmap.maps.floors_plot import plot_ratio_box, plot_side_by_side
+from spreadmap.maps.grids import grid_frame, values
+from spreadmap.surrogate import load_model
 
-from spreadmap.case.substrate import FLAT, ROUGH, floor_label, floor_of, mean_hollow_depth  # noqa: E402
-from spreadmap.config import load  # noqa: E402
-from spreadmap.maps.floors import box_sample, by_band, compare  # noqa: E402
-from spreadmap.maps.floors_plot import plot_ratio_box, plot_side_by_side  # noqa: E402
-from spreadmap.maps.grids import grid_frame, values  # noqa: E402
-from spreadmap.surrogate import load_model  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 TARGETS = ("mfr", "pd")
 

@@ -6,7 +6,7 @@
 Reads the seed repeats of the shipped scene under docs/ (spreadmap.noise_law.cells), fits per
 target ln SD = ln value + a + b ln(N/150) + g ln((h/d)/2) by the chi-square likelihood of the cells'
 sample variances (spreadmap.noise_law.fit), tests b = -1/2 and other terms, checks the law leave-
-one-point-out (spreadmap.noise_law.heldout) beside the stated SDs and the hand bands, checks the
+one-point-out (spreadmap.noise_law.leave_one_out) beside the stated SDs and the hand bands, checks the
 other scenes' arms, and writes to --out: README.md, law.json (the coefficients, their intervals, the
 config block), cells.csv, heldout.csv, terms.csv, by_h_over_d.csv, pooled_by_band.csv, other_arms.csv and the figure
 noise_law.{png,pdf,csv}. Prints the `noise_model` config block.
@@ -16,23 +16,21 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import yaml
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from spreadmap import config as spreadmap_config
+from spreadmap.case.substrate import floor_label
+from spreadmap.metrics.noise import calibration_factors
+from spreadmap.noise_law.cells import OTHER_ARMS, published_cells
+from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval
+from spreadmap.noise_law.leave_one_out import leave_point_out, predictive_check, scored
+from spreadmap.noise_law.plot import law_figure
 
-from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.case.substrate import floor_label  # noqa: E402
-from spreadmap.metrics.noise import calibration_factors  # noqa: E402
-from spreadmap.noise_law.cells import OTHER_ARMS, published_cells  # noqa: E402
-from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval  # noqa: E402
-from spreadmap.noise_law.heldout import leave_point_out, predictive_check, scored  # noqa: E402
-from spreadmap.noise_law.plot import law_figure  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 TARGETS = ("mfr", "pd")
 BANDS = ((0.0, 2.0, "h/d < 2"), (2.0, 3.0, "2 <= h/d < 3"), (3.0, math.inf, "h/d >= 3"))
@@ -288,7 +286,7 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "sqrt(k / (k - 1)), has one case's SD); the share inside, its interval the union of a bootstrap over design "
         "points and Clopper-Pearson over seeds, called too wide or too narrow only when it excludes 90 %. "
         "Shape: a Kolmogorov-Smirnov test of "
-        "the cells' PITs, F_chi2_nu(nu u), against uniform (`spreadmap/noise_law/heldout.py`, `heldout.csv`).",
+        "the cells' PITs, F_chi2_nu(nu u), against uniform (`spreadmap/noise_law/leave_one_out.py`, `heldout.csv`).",
         "",
     ]
     for target in TARGETS:

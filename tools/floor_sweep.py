@@ -16,12 +16,11 @@ from pathlib import Path
 
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from spreadmap.config import load
+from spreadmap.files import atomic_path
+from spreadmap.maps.floors import piles_by_band
 
-from spreadmap.config import load  # noqa: E402
-from spreadmap.files import atomic_path  # noqa: E402
-from spreadmap.maps.floors import piles_by_band  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def main(argv=None) -> int:

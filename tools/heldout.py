@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The held-out check of a study (spreadmap.surrogate.heldout), in two steps with the runs between:
+"""The held-out check of a study (spreadmap.surrogate.heldout_points), in two steps with the runs between:
 
     # 1. before any run: choose the points away from every case run, predict them, write both
     python tools/heldout.py choose --model results/surrogate/model.joblib \\
@@ -20,15 +20,10 @@ import json
 import sys
 from pathlib import Path
 
-try:
-    import spreadmap  # noqa: F401
-except ImportError:  # not installed: use the checkout
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
 import pandas as pd
 
 from spreadmap import config as spreadmap_config
-from spreadmap.surrogate import heldout
+from spreadmap.surrogate import heldout_points
 from spreadmap.surrogate.cli import predict_logged, write_csv
 from spreadmap.surrogate.saved_model import ModelFileError, load_model
 
@@ -44,10 +39,10 @@ def read_csv(path: str) -> pd.DataFrame:
 def choose(args) -> int:
     cfg = spreadmap_config.load(Path(args.config))
     ran = pd.concat([read_csv(p) for p in args.ran], ignore_index=True)
-    points = heldout.choose_points(args.n, cfg["ranges"], ran, args.min_distance, args.seed, args.name_prefix)
+    points = heldout_points.choose_points(args.n, cfg["ranges"], ran, args.min_distance, args.seed, args.name_prefix)
     model = load_model(args.model)
     predictions = predict_logged(model, points, sys.stderr)
-    write_csv(heldout.runs_of(points, args.seeds, args.preset), args.points)
+    write_csv(heldout_points.runs_of(points, args.seeds, args.preset), args.points)
     write_csv(predictions, args.predictions)
     print(f"{args.n} held-out points ({len(args.seeds)} seeds each) in {args.points}; "
           f"their predictions in {args.predictions}")
@@ -56,11 +51,11 @@ def choose(args) -> int:
 
 def score(args) -> int:
     points = read_csv(args.points).drop_duplicates("name")
-    runs = heldout.match_runs(points, read_csv(args.table))
+    runs = heldout_points.match_runs(points, read_csv(args.table))
     predictions = read_csv(args.predictions)
     tables, summaries = [], []
     for target in args.targets:
-        table, summary = heldout.score(predictions, runs, target, args.level)
+        table, summary = heldout_points.score(predictions, runs, target, args.level)
         tables.append(table.assign(target=target).rename(columns={target: "predicted"}))
         summaries.append(summary)
         print(f"{target}: {summary['inside']}/{summary['points']} seed means inside their "

@@ -18,9 +18,7 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from spreadmap.case.migrate import carry_to_current_template, migrate_case_folders  # noqa: E402
+from spreadmap.case.migrate import carry_to_current_template, migrate_case_folders
 
 
 def main(argv=None) -> int:

@@ -12,11 +12,8 @@ file that is not a surrogate exit with status 2 and a one-line message. The logi
 spreadmap.surrogate.cli; the workflow's rule predict runs it through scripts/predict.py.
 """
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from spreadmap.surrogate.cli import cli_main  # noqa: E402
+from spreadmap.surrogate.cli import cli_main
 
 if __name__ == "__main__":
     sys.exit(cli_main())

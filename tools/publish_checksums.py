@@ -16,10 +16,9 @@ import argparse
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from spreadmap.study.checksums import MANIFEST, PUBLISHED, check_folder, listed_files, write_manifest
 
-from spreadmap.study.checksums import MANIFEST, PUBLISHED, check_folder, listed_files, write_manifest  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def main(argv=None) -> int:

@@ -6,21 +6,19 @@ Chromium; the page itself, ~9 MB, is written to a temporary folder and not kept)
     .venv/bin/python tools/publish_decisions.py
 """
 import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from spreadmap import config as spreadmap_config
+from spreadmap.case.substrate import floor_label
+from spreadmap.decisions import decision_config, powders_from_config, recommendations
+from spreadmap.decisions.explorer import write_explorer
+from spreadmap.decisions.figure import decision_figure
+from spreadmap.files import write_text_atomically
+from spreadmap.surrogate import load_model
+from spreadmap.surrogate.settings import map_config
 
-from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.case.substrate import floor_label  # noqa: E402
-from spreadmap.decisions import decision_config, powders_from_config, recommendations  # noqa: E402
-from spreadmap.decisions.explorer import write_explorer  # noqa: E402
-from spreadmap.decisions.figure import decision_figure  # noqa: E402
-from spreadmap.files import write_text_atomically  # noqa: E402
-from spreadmap.surrogate import load_model  # noqa: E402
-from spreadmap.surrogate.settings import map_config  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 OUT = ROOT / "docs" / "decisions"
 

@@ -22,17 +22,16 @@ import shutil
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from spreadmap import config as cfgmod
+from spreadmap.case.identity import readable_part
+from spreadmap.case.render import template_sha256
+from spreadmap.files import write_text_atomically
+from spreadmap.study.cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress
+from spreadmap.study.checksums import write_manifest
+from spreadmap.study.summary import summary_markdown, trends
+from spreadmap.table import write_table
 
-from spreadmap import config as cfgmod  # noqa: E402
-from spreadmap.case.identity import readable_part  # noqa: E402
-from spreadmap.case.render import template_sha256  # noqa: E402
-from spreadmap.files import write_text_atomically  # noqa: E402
-from spreadmap.study.cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress  # noqa: E402
-from spreadmap.study.checksums import write_manifest  # noqa: E402
-from spreadmap.study.summary import summary_markdown, trends  # noqa: E402
-from spreadmap.table import write_table  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 COPIES = {  # source under the workflow directory -> destination under --out
     "results/convergence": "convergence",

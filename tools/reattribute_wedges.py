@@ -26,13 +26,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from spreadmap import config as cfgmod  # noqa: E402
-from spreadmap.case.launcher import run_case, write_json_atomically  # noqa: E402
-from spreadmap.case.render import render, template_sha256  # noqa: E402
-from spreadmap.metrics import case_metrics  # noqa: E402
+from spreadmap import config as cfgmod
+from spreadmap.case.launcher import run_case, write_json_atomically
+from spreadmap.case.render import render, template_sha256
+from spreadmap.metrics import case_metrics
 
 FIELDS = ("peak_overlap_free", "peak_overlap_wedged")
 

@@ -19,17 +19,14 @@ import json
 import sys
 from pathlib import Path
 
+import pandas as pd
 import yaml
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-import pandas as pd  # noqa: E402
-
-from spreadmap import config as spreadmap_config  # noqa: E402
-from spreadmap.loop.cost import PlannedCost  # noqa: E402
-from spreadmap.loop.model import make_map_fit  # noqa: E402
-from spreadmap.loop.stepper import step, step_number  # noqa: E402
-from spreadmap.noise_law.apply import case_noise, check_sections  # noqa: E402
+from spreadmap import config as spreadmap_config
+from spreadmap.loop.cost import PlannedCost
+from spreadmap.loop.model import make_map_fit
+from spreadmap.loop.stepper import step, step_number
+from spreadmap.noise_law.apply import case_noise, check_sections
 
 
 def last_two_steps(steps_dir: Path) -> tuple[dict, dict]:

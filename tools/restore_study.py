@@ -29,11 +29,9 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from spreadmap.files import atomic_path  # noqa: E402
-from spreadmap.study.checksums import PublishedFileError, verified_bytes  # noqa: E402
-from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps  # noqa: E402
+from spreadmap.files import atomic_path
+from spreadmap.study.checksums import PublishedFileError, verified_bytes
+from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps
 
 
 def write_bytes_atomically(path: Path, data: bytes) -> None:

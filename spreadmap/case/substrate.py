@@ -37,8 +37,9 @@ from __future__ import annotations
 
 import math
 
+from ..schema import checked
+
 FLAT, ROUGH = "flat", "rough"
-DEFAULT_JITTER = 0.5  # schemas/config.schema.yaml: scene.substrate.jitter
 COVERED = math.pi / (2.0 * math.sqrt(3.0))  # share of the plane under a sphere's cap (hexagonal layer)
 
 
@@ -122,12 +123,12 @@ def floor_of(config: dict | None) -> tuple[str, float]:
     Returns
     -------
     kind : str
-        "flat" or "rough" (as the config says; default "flat").
+        "flat" or "rough" (as the config says; default: the schema's ``scene.substrate.kind``).
     jitter : float
-        The rough floor's jitter [R] (default 0.5).
+        The rough floor's jitter [R] (default: the schema's ``scene.substrate.jitter``).
     """
-    substrate = ((config or {}).get("scene") or {}).get("substrate") or {}
-    return substrate.get("kind", FLAT), float(substrate.get("jitter", DEFAULT_JITTER))
+    substrate = checked("scene.substrate", ((config or {}).get("scene") or {}).get("substrate"))
+    return substrate["kind"], float(substrate["jitter"])
 
 
 def floor_label(config: dict | None) -> str:

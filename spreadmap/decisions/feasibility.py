@@ -46,7 +46,7 @@ from threadpoolctl import threadpool_limits
 
 from ..design import NAMES
 from ..maps import grids
-from .settings import DecisionError, span
+from .config_section import DecisionError, span
 
 STATUSES = ("recommended", "beyond_data", "beyond_data_only", "none_meets")
 BLOCK_POINTS = 400  # design points per joint draw (a GP draw factorises a matrix of this side; cost ~ side^3)

@@ -4,7 +4,7 @@
   (``replay_plots``: its figure).
 * ``sampling_study`` -- the study's rule on noise-free test functions; ``noisy_study`` -- the
   older sampling-design study with noise; ``cost_study`` -- the map per CPU hour.
-* ``plots`` -- the figures of the three sampling studies.
+* ``experiment_plots`` -- the figures of the three sampling studies.
 
 Run by benchmarks/replay.py, benchmarks/noisy_study.py and benchmarks/cost_study.py; the
 sampling study by the workflow (scripts/sampling_study.py).

@@ -10,7 +10,7 @@ Where the workflow would run YADE, the replay draws the case from a ``World``:
   case of the study (docs/study: about 850 distinct `default` cases), its posterior mean for MFR
   and PD. A smooth function with the study's shape, known everywhere.
 * **noise**: the noise law of the published cases: their calibrated per-case SDs (config
-  ``noise_calibration``) fitted as ln SD linear in the physics inputs (``surrogate.noise.CaseNoise``,
+  ``noise_calibration``) fitted as ln SD linear in the physics inputs (``surrogate.noise_sd.CaseNoise``,
   it varies with h/d as the seed repeats do), MFR and PD drawn with correlation ``rho`` (the seed
   repeats' 0.79-0.97). Another preset scales the SD by sqrt(N_default / N_preset), N the spheres a
   window measures: max(the preset's target, the spheres of its shortest window), capped by its

@@ -345,10 +345,10 @@ def machine_description(table: pd.DataFrame) -> dict:
     Returns
     -------
     dict
-        ``spreadmap.machine.description()`` (this machine, now) plus ``yade``: the sorted
+        ``spreadmap.host.description()`` (this machine, now) plus ``yade``: the sorted
         distinct YADE versions of the cases.
     """
-    from ..machine import description
+    from ..host import description
 
     versions = sorted(set(table.get("yade_version", pd.Series(dtype=str)).dropna().astype(str)))
     return {**description(), "yade": versions}

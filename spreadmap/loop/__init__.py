@@ -8,7 +8,7 @@ enough, and if not choose the next batch of cases.
 * ``model`` -- the map's model (the surrogate that draws the maps) behind the small interface
   those criteria need, ``active`` -- where the next batch of cases goes, ``cost`` -- what a case
   will cost, from the spheres and steps its scene plans, ``stepper`` -- one step of the loop.
-* ``plots`` -- the loop's figure: each criterion at every batch.
+* ``loop_plot`` -- the loop's figure: each criterion at every batch.
 
 The published study's rule is reported beside the loop's criteria; it lives in
 ``spreadmap.study_rule``.

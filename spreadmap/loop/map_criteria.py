@@ -72,46 +72,41 @@ from .model import FitFunction, MapModel, table_data, usable_rows
 
 CRITERIA: tuple[str, ...] = ("map_error", "cv_rmse", "map_change", "ci")
 MIN_CASES = 5  # usable cases a target needs before its model is fitted and the criteria evaluated
-# the criteria's defaults are the schema's (config ``converge:``); the CI criterion's half-widths
-# per statistic are the one default the schema leaves to the code
-DEFAULTS: dict[str, Any] = {k: v for k, v in checked("converge").items()
-                            if k in ("stop_on", "hold_for", *CRITERIA)}
-DEFAULTS["ci"]["halfwidth"] = {"mean": 0.05, "std": 0.10, "median": 0.07, "skewness": 0.30, "kurtosis": 0.60}
 
 
-def settings(cfg: Mapping | None) -> dict[str, Any]:
-    """The criteria's settings: DEFAULTS overridden by config ``converge:`` (unknown criteria refused)."""
-    cfg = dict(cfg or {})
-    if cfg.get("_resolved"):  # already the output of settings(): apply nothing twice
-        return cfg
-    out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in DEFAULTS.items()}
-    out["ci"]["halfwidth"] = dict(DEFAULTS["ci"]["halfwidth"])
-    for key in ("map_error", "cv_rmse", "map_change", "ci"):
-        sub = dict(cfg.get(key) or {})
-        if key == "map_error" and "tolerance" in sub:
-            out["map_error"]["tolerance"] = {**DEFAULTS["map_error"]["tolerance"], **dict(sub.pop("tolerance") or {})}
-        if key == "ci" and "halfwidth" in sub:
-            hw = dict(sub.pop("halfwidth") or {})
-            bad = set(hw) - set(STATISTICS)
-            if bad:
-                raise ValueError(f"config key 'converge.ci.halfwidth': unknown statistics {sorted(bad)}; "
-                                 f"allowed: {list(STATISTICS)}")
-            out["ci"]["halfwidth"].update(hw)
-            # null drops a statistic from the criterion (e.g. kurtosis, whose CI narrows slowly)
-            out["ci"]["halfwidth"] = {k: v for k, v in out["ci"]["halfwidth"].items() if v is not None}
-        out[key].update(sub)
-    if "stop_on" in cfg:
-        stop_on = list(cfg["stop_on"])
-        bad = set(stop_on) - set(CRITERIA)
-        if bad:
-            raise ValueError(f"config key 'converge.stop_on': unknown criteria {sorted(bad)}; allowed: {list(CRITERIA)}")
-        out["stop_on"] = stop_on
-    if "hold_for" in cfg:
-        out["hold_for"] = int(cfg["hold_for"])
-    if out["map_change"]["statistic"] not in ("max", "rms"):
-        raise ValueError(f"config key 'converge.map_change.statistic': {out['map_change']['statistic']!r}; "
-                         "allowed: max, rms")
-    out["_resolved"] = True
+def settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[str, Any]:
+    """The criteria's settings: config ``converge:`` (or a part of it) with the schema's defaults.
+
+    The one reader of the criteria's keys (``stop_on``, ``hold_for``, ``map_error``, ``cv_rmse``,
+    ``map_change``, ``ci``); their defaults are the schema's alone (``spreadmap.schema.checked``),
+    and the schema refuses unknown criteria, statistics and keys. A CI half-width of null drops
+    that statistic from the criterion.
+
+    Parameters
+    ----------
+    cfg : Mapping or None
+        The config's ``converge:`` section, whole or in part; None or {}: the defaults.
+    targets : sequence of str or None, optional
+        The loop's targets: a map-error tolerance for any other target is refused. None: not checked.
+
+    Returns
+    -------
+    dict
+        ``stop_on``, ``hold_for`` and one dict per criterion.
+
+    Raises
+    ------
+    ValueError
+        If the section does not match the schema, or a tolerance names a target not in `targets`;
+        the message names the key.
+    """
+    conv = checked("converge", cfg)
+    out = {key: conv[key] for key in ("stop_on", "hold_for", *CRITERIA)}
+    out["ci"]["halfwidth"] = {k: v for k, v in out["ci"]["halfwidth"].items() if v is not None}
+    unknown = sorted(set(out["map_error"]["tolerance"]) - set(targets)) if targets is not None else []
+    if unknown:
+        raise ValueError(f"config key 'converge.map_error.tolerance': targets {unknown} are not the loop's "
+                         f"targets; allowed: {list(targets)}")
     return out
 
 

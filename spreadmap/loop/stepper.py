@@ -40,28 +40,19 @@ import pandas as pd
 from ..case.identity import rounded
 from ..design import NAMES, Design
 from ..sampling import halton
+from ..schema import checked
 from ..study_rule.rule import DEFAULT_TOLERANCE, batches_until_converged
 from ..table import usable
 from . import active, map_criteria
 from .model import FitFunction, make_map_fit
 
-STEP_DEFAULTS: dict[str, Any] = {
-    "start": 32, "batch": 16, "budget": 512, "cpu_budget_h": None, "sampling": "active",
-    "acquisition": "ivr_per_cpu", "candidates": 4096, "seed": 7, "k_consecutive": 3, "lds_share": 0.5,
-}
 
-
-def step_settings(cfg: Mapping | None) -> dict[str, Any]:
-    cfg = dict(cfg or {})
-    out = {**STEP_DEFAULTS, **{k: v for k, v in cfg.items() if k in STEP_DEFAULTS}}
-    if out["sampling"] not in ("active", "lds"):
-        raise ValueError(f"config key 'converge.sampling': {out['sampling']!r}; allowed: active, lds")
-    if out["acquisition"] not in active.ACQUISITIONS:
-        raise ValueError(f"config key 'converge.acquisition': {out['acquisition']!r}; "
-                         f"allowed: {list(active.ACQUISITIONS)}")
-    if not 0.0 <= float(out["lds_share"]) <= 1.0:
-        raise ValueError(f"config key 'converge.lds_share': {out['lds_share']!r}; allowed: 0 to 1")
-    out["criteria"] = map_criteria.settings(cfg)
+def step_settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[str, Any]:
+    """The ``converge:`` section with the schema's defaults filled (``spreadmap.schema.checked``;
+    a partial section is completed, an unknown key or value refused) and, under ``criteria``, the
+    map criteria's settings (``map_criteria.settings``, which checks the tolerances' targets)."""
+    out = checked("converge", cfg)
+    out["criteria"] = map_criteria.settings(out, targets)
     return out
 
 
@@ -108,8 +99,8 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
     n : int
         Number of cases run; must equal ``len(table)``.
     cfg : Mapping or None
-        The config's ``converge:`` section (``STEP_DEFAULTS`` and the map criteria's defaults for
-        what it leaves out).
+        The config's ``converge:`` section, whole or in part (the schema's defaults for what it
+        leaves out).
     prev_step : Mapping or None, optional
         The previous step's record (its ``n``, ``is_lds``, criteria path and study-rule path);
         None for the first step (every case then counts as LDS).
@@ -150,14 +141,10 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
         names a target not in `targets`, ``ivr_per_cpu`` is asked for without `cost`, or the
         previous step lists another number of cases.
     """
-    s = step_settings(cfg)
+    s = step_settings(cfg, targets)
     crit = s["criteria"]
     if len(table) != n:
         raise ValueError(f"the step after {n} cases got a table of {len(table)} rows")
-    unknown = sorted(set(crit["map_error"]["tolerance"]) - set(targets))
-    if unknown:
-        raise ValueError(f"config key 'converge.map_error.tolerance': targets {unknown} are not the loop's "
-                         f"targets; allowed: {list(targets)}")
     if s["sampling"] == "active" and s["acquisition"] == "ivr_per_cpu" and cost is None:
         raise ValueError("config key 'converge.acquisition': ivr_per_cpu needs the planned cost of a case (cost=)")
     fit = fit or make_map_fit()
@@ -168,7 +155,7 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
         raise ValueError(f"the previous step lists {len(is_lds)} cases, the table has {n}")
     lds_table = table[np.asarray(is_lds, bool)]
     result = map_criteria.evaluate(table, fit, targets, None if n_prev is None else table.iloc[:n_prev],
-                                   grids, crit, seed=0, floors=floors, stats_table=lds_table)
+                                   grids, cfg, seed=0, floors=floors, stats_table=lds_table)
     if models_out is not None:
         models_out.update(result["models"])
     tracker = map_criteria.Tracker(crit["stop_on"], crit["hold_for"],

@@ -1,7 +1,7 @@
 """Processing design maps from the surrogate, with their uncertainty; the DEM sample and regimes.
 
 ``grids`` computes (evaluated design grids, support, regime probabilities, the effect of friction,
-the machine map's y axis); one module per figure: ``machine`` (machine map), ``powder``
+the machine map's y axis); one module per figure: ``machine`` (machine map), ``powder_maps``
 (band and cluster maps), ``parallel`` (parallel coordinates of the DEM cases), ``regimes``. The
 machine, powder and regime maps compute their numbers apart from drawing them (``powder_band_grid``
 then ``draw_powder_band_map``, ...), so a figure can be redrawn from its CSV;
@@ -12,7 +12,7 @@ title and in its CSV (spreadmap.figures.save_figure).
 from .grids import choose_machine_y
 from .machine import machine_grid, machine_map
 from .parallel import best_case, parallel_coordinates, usable_cases
-from .powder import powder_band_map, powder_cluster_map
+from .powder_maps import powder_band_map, powder_cluster_map
 from .regimes import REGIMES, regime_overlay
 from .style import MapResult
 

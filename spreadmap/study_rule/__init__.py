@@ -4,7 +4,7 @@
 * ``rule`` -- the reference study's rule (five statistics of MFR and PD change by less than
   0.5 % between partitions), computed exactly as the study ran it and reported as the study's
   row.  Its names are re-exported here (``spreadmap.study_rule.convergence_table`` etc.).
-* ``plots`` -- its figures: the distributions per partition and the statistics against N.
+* ``rule_plots`` -- its figures: the distributions per partition and the statistics against N.
 """
 from .rule import (  # noqa: F401
     DEFAULT_FLOORS,

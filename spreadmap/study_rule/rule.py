@@ -28,7 +28,7 @@ converges.  The rule used here is
 
     change = |curr - prev| / max(|prev|, floor[statistic])
 
-with the floors of ``DEFAULT_FLOORS``:
+with the floors of ``DEFAULT_FLOORS`` (the schema's ``convergence.floors``):
 
 * ``skewness`` and ``kurtosis``: floor **1.0**.  Both are dimensionless standardised moments whose
   natural unit is 1 (a distribution with |skewness| or |excess kurtosis| below 1 is "moderately"
@@ -36,7 +36,7 @@ with the floors of ``DEFAULT_FLOORS``:
   N = 1000).  Below |value| = 1 the test is therefore an *absolute* one: the change must be below
   ``tolerance * 1.0`` (0.005 by default); above it, it is the ordinary relative one.  The
   criterion stays continuous in ``prev`` and never becomes stricter than the absolute one.
-* ``mean``, ``std``, ``median``: floor ``TINY`` (1e-12), i.e. an ordinary relative change.  MFR
+* ``mean``, ``std``, ``median``: floor 1e-12 (``TINY``), i.e. an ordinary relative change.  MFR
   and PD are positive fractions of order 0.1-0.7, so their mean, median and spread are only near
   zero when a whole partition jams (MFR all 0); then 0/TINY = 0 reads as "no change".
 
@@ -75,15 +75,10 @@ from ..schema import checked
 from ..table import usable as usable_rows
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")
-TINY = 1e-12
-DEFAULT_FLOORS: dict[str, float] = {
-    "mean": TINY,
-    "std": TINY,
-    "median": TINY,
-    "kurtosis": 1.0,
-    "skewness": 1.0,
-}
-DEFAULT_TOLERANCE = checked("convergence")["tolerance"]  # the schema's convergence.tolerance, for callers without a config
+TINY = 1e-12  # a scale below which a spread is taken for none
+# the schema's convergence.floors and convergence.tolerance, for callers without a config
+DEFAULT_FLOORS: dict[str, float] = checked("convergence")["floors"]
+DEFAULT_TOLERANCE = checked("convergence")["tolerance"]
 NOT_CONVERGED = "not converged within the cases run"
 DEFAULT_TARGETS: tuple[str, ...] = ("mfr", "pd")
 

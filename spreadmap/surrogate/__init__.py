@@ -1,10 +1,11 @@
 """The noise-aware surrogate of the DEM results, its validation, the saved model and prediction.
 
 Submodules, one job each: ``settings`` (config, no scikit-learn), ``training_rows`` (usable cases,
-partitions, per-case noise), ``features`` (model inputs), ``noise`` (a new run's noise SD),
-``models`` (GP and MLP ensemble), ``validation`` (repeated k-fold numbers), ``study`` (the reference
-study's protocol), ``fitting`` (all of it on a table), ``saved_model`` (file and loading),
-``prediction`` (points in, mean and SDs out), ``cli`` (tools/predict.py, scripts/predict.py), ``plots``.
+partitions, per-case noise), ``features`` (model inputs), ``noise_sd`` (a new run's noise SD),
+``models`` (GP and MLP ensemble), ``validation`` (repeated k-fold numbers), ``study_protocol`` (the
+reference study's protocol), ``fitting`` (all of it on a table), ``saved_model`` (file and loading),
+``prediction`` (points in, mean and SDs out), ``cli`` (tools/predict.py, scripts/predict.py), ``plots``,
+``correction`` (the preset-to-reference factor on the maps), ``heldout_points`` (tools/heldout.py).
 
 Importing this package imports no scikit-learn: config validation reads ``make_config`` from here.
 The other names below are loaded on first use.

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ..design import NAMES, bounds
-from . import study, validation
+from . import study_protocol, validation
 from .models import make_model
 from .saved_model import FORMAT, SurrogateModel
 from .settings import make_config, resolve_targets
@@ -134,8 +134,8 @@ def fit_surrogate(df: pd.DataFrame, config=None, source_path=None, ranges=None, 
         models[t] = make_model(chosen[t], cfg, final=True).fit(X, rows.y(t), rows.sd(t))
         log(f"final {chosen[t]} model of {t} on {len(rows)} cases: {models[t].describe()}")
 
-    runs = study.run_protocol(rows, targets, cfg)
-    summ = study.summary(runs)
+    runs = study_protocol.run_protocol(rows, targets, cfg)
+    summ = study_protocol.summary(runs)
     learning = learning_curve(rows, targets, chosen, cfg, notes)
 
     low, high = bounds(ranges)

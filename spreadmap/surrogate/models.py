@@ -36,7 +36,7 @@ from sklearn.neural_network import MLPRegressor
 from threadpoolctl import threadpool_limits
 
 from .features import Standardiser
-from .noise import CaseNoise, fill_missing
+from .noise_sd import CaseNoise, fill_missing
 
 JITTER = 1e-10
 

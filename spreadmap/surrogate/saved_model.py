@@ -153,6 +153,19 @@ def _saved_sha256(path: Path) -> str | None:
     return value if isinstance(value, str) else None
 
 
+# modules renamed since models were saved (pickles name a class by its module): old name -> new
+RENAMED_MODULES = {"spreadmap.surrogate.noise": "spreadmap.surrogate.noise_sd"}
+
+
+def _alias_renamed_modules() -> None:
+    """Let a model saved before a module's rename load: its old name imports the new module."""
+    import importlib
+    import sys
+
+    for old, new in RENAMED_MODULES.items():
+        sys.modules.setdefault(old, importlib.import_module(new))
+
+
 def load_model(path) -> SurrogateModel:
     """Load a saved surrogate.
 
@@ -197,6 +210,7 @@ def load_model(path) -> SurrogateModel:
         raise CorruptModelError(path, f"{path} is not the surrogate that was saved: its SHA-256 differs from the "
                                       f"one its sidecar {sidecar_path(path).name} recorded (truncated or corrupted); "
                                       f"{_RETRAIN}")
+    _alias_renamed_modules()
     try:
         model = joblib.load(io.BytesIO(data))
     except Exception as error:  # noqa: BLE001  unpickling foreign bytes can raise anything (struct.error, ...)

@@ -67,7 +67,7 @@ def coverage_verdict(low: float, high: float, level: float) -> str:
     when its whole interval lies above the level (the intervals cover more than they claim),
     "too narrow" when it lies below, "consistent" when it contains the level, "unknown" when
     either end is missing."""
-    from ..noise_law.heldout import verdict  # the noise law's held-out check reads its intervals so
+    from ..noise_law.leave_one_out import verdict  # the noise law's held-out check reads its intervals so
 
     if not (np.isfinite(low) and np.isfinite(high)):
         return "unknown"

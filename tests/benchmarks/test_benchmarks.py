@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import ROOT
+from conftest import ROOT, script_module
 
 from spreadmap import design
 from spreadmap import surrogate as S
@@ -212,8 +212,7 @@ def test_layer_noise_pools_the_seed_spread_within_points(tmp_path):
 def test_cost_map_summary_on_a_hand_made_table():
     """Four cases of 1, 2, 3 and 100 s at h/d 1, 2, 3, 4: mean 26.5, median 2.5, max / median 40,
     103 of the 106 s (and half the cases) at h/d >= 3."""
-    sys.path.insert(0, str(BENCH))
-    import cost_map
+    cost_map = script_module("benchmarks/cost_map.py")
 
     s = cost_map.summary(np.array([1.0, 2.0, 3.0, 100.0]), np.array([1.0, 2.0, 3.0, 4.0]))
     assert s["mean"] == pytest.approx(26.5) and s["median"] == pytest.approx(2.5)

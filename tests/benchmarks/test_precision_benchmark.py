@@ -1,15 +1,12 @@
 """The precision benchmark's statistics (benchmarks/precision.py) on synthetic cases whose
 counting-noise constant and spheres per CPU-second are known."""
-import importlib.util
 import math
 
 import numpy as np
 import pytest
-from conftest import ROOT
+from conftest import script_module
 
-spec = importlib.util.spec_from_file_location("precision_benchmark", ROOT / "benchmarks" / "precision.py")
-bench = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(bench)
+bench = script_module("benchmarks/precision.py")
 
 
 def cases(arm, c, n_passed, cpu, seeds, rng, points=8):

@@ -10,7 +10,7 @@ from conftest import ROOT
 from spreadmap.case.identity import case_scene
 from spreadmap.case.launcher import failure_reason, failure_record, retry_wanted
 from spreadmap.metrics import case_metrics
-from spreadmap.summary import run_summary, summary_text
+from spreadmap.run_report import run_summary, summary_text
 from spreadmap.table import build_table
 
 POINT = {"f": 0.3, "d_um": 10.0, "h_um": 60.0, "v_mm_s": 10.0}

@@ -98,7 +98,10 @@ CHANGED = {("convergence", "tolerance"): 0.0125, ("maps", "powder", "h_um"): 61.
            ("maps", "support", "max_distance"): 2.5, ("metrics", "counting_noise_c"): 0.41,
            ("metrics", "layer_block_d"): 3.5, ("noise_model", "n_ref"): 175, ("stability", "min_heap_h2"): 0.65,
            ("stability", "max_wedge_overlap_ratio"): 0.3, ("stability", "max_flow_decline_z"): 2.5,
-           ("converge", "cost_law", "ln_a"): -17.5}
+           ("converge", "cost_law", "ln_a"): -17.5, ("converge", "budget"): 300, ("converge", "acquisition"): "ivr",
+           ("converge", "map_error", "tolerance", "pd"): 0.03, ("converge", "ci", "halfwidth", "kurtosis"): 0.45,
+           ("converge", "map_change", "box_k"): 4, ("convergence", "floors", "skewness"): 0.75,
+           ("scene", "substrate", "jitter"): 0.25}
 READ = """
 import inspect, json, sys
 from pathlib import Path
@@ -106,21 +109,25 @@ import spreadmap.schema
 spreadmap.schema.SCHEMA = Path(sys.argv[1])  # before any module reads it
 from spreadmap.loop import cost, stepper
 from spreadmap.loop.map_criteria import map_grids
-from spreadmap.maps import grids, machine, powder, regimes
+from spreadmap.maps import grids, machine, powder_maps, regimes
 from spreadmap.metrics import case
 from spreadmap.noise_law import apply
-from spreadmap.study_rule.rule import DEFAULT_TOLERANCE
+from spreadmap.study_rule.rule import DEFAULT_FLOORS, DEFAULT_TOLERANCE
+from spreadmap.case.substrate import floor_of
 default = lambda f, name: inspect.signature(f).parameters[name].default
 print(json.dumps({
     "tolerance": DEFAULT_TOLERANCE, "stepper_tolerance": default(stepper.step, "tolerance"),
-    "band_h": default(powder.powder_band_map, "h_um"), "cluster_v": default(powder.powder_cluster_map, "v_mm_s"),
+    "band_h": default(powder_maps.powder_band_map, "h_um"), "cluster_v": default(powder_maps.powder_cluster_map, "v_mm_s"),
     "machine_f": default(machine.machine_map, "f"), "machine_n_h": default(machine.machine_map, "n_h"),
     "plane_v": default(regimes.regime_overlay, "v_mm_s"),
     "support": getattr(grids, "MAP_DEFAULTS", {}).get("support", {}).get("max_distance"),
     "grid_powder": map_grids()["powder"][0].tolist(), "grid_machine_rows": len(map_grids()["machine"]),
     "counting_c": default(apply.case_noise, "counting_c"), "n_ref": getattr(apply, "LAW_REFS", {}).get("n_ref"),
     "block": case.LAYER_BLOCK_D, "heap": case.MIN_HEAP_H2, "wedge": case.MAX_WEDGE_OVERLAP,
-    "decline": getattr(case, "MAX_FLOW_DECLINE_Z", None), "ln_a": cost.DEFAULT_LAW["ln_a"]}))
+    "decline": getattr(case, "MAX_FLOW_DECLINE_Z", None), "ln_a": cost.DEFAULT_LAW["ln_a"],
+    "step": {k: v for k, v in stepper.step_settings({}).items() if k != "criteria"},
+    "criteria": stepper.step_settings(None)["criteria"], "floors": DEFAULT_FLOORS,
+    "jitter": floor_of({"scene": {"substrate": {"kind": "rough"}}})[1]}))
 """
 
 
@@ -147,3 +154,47 @@ def test_the_packages_defaults_follow_the_schema(tmp_path, schema):
     assert got["plane_v"] == 12.5 and got["support"] == 2.5
     assert got["counting_c"] == 0.41 and got["n_ref"] == 175 and got["block"] == 3.5
     assert (got["heap"], got["wedge"], got["decline"], got["ln_a"]) == (0.65, 0.3, 2.5, -17.5)
+    assert (got["step"]["budget"], got["step"]["acquisition"], got["step"]["cost_law"]["ln_a"]) == (300, "ivr", -17.5)
+    assert got["criteria"]["map_error"]["tolerance"]["pd"] == 0.03 and got["criteria"]["map_change"]["box_k"] == 4
+    assert got["criteria"]["ci"]["halfwidth"]["kurtosis"] == 0.45
+    assert got["floors"]["skewness"] == 0.75 and got["jitter"] == 0.25
+
+
+def schema_defaults(node: dict):
+    """What the schema states for an absent value at `node`: its default, or, for an object, the
+    defaults of its properties (read from the file, not by spreadmap.schema); None: nothing."""
+    if "properties" in node:
+        props = {k: (schema_defaults(v), "default" in v) for k, v in node["properties"].items()}
+        return {k: v for k, (v, stated) in props.items() if v is not None or stated}
+    return copy.deepcopy(node.get("default"))
+
+
+def test_each_settings_reader_given_nothing_returns_the_schemas_defaults(schema):
+    """The package's readers of a section handed nothing (a caller without a config: a test, the
+    replay, a benchmark) return the schema's defaults, every one of them, and nothing else."""
+    from spreadmap.case.substrate import floor_of
+    from spreadmap.loop import map_criteria, stepper
+    from spreadmap.study_rule.rule import DEFAULT_FLOORS
+
+    props = schema["properties"]
+    converge = schema_defaults(props["converge"])
+    step = stepper.step_settings(None)
+    assert {k: v for k, v in step.items() if k != "criteria"} == converge
+    criteria = {k: converge[k] for k in ("stop_on", "hold_for", *map_criteria.CRITERIA)}
+    assert step["criteria"] == map_criteria.settings({}) == criteria
+    assert DEFAULT_FLOORS == schema_defaults(props["convergence"])["floors"]
+    substrate = schema_defaults(props["scene"]["properties"]["substrate"])
+    assert floor_of(None) == (substrate["kind"], substrate["jitter"])
+
+
+def test_a_partial_section_keeps_its_values_and_gets_the_rest_from_the_schema(schema):
+    """One value given: it, and the schema's default beside it in the same object (the map
+    tolerance per target); a tolerance for a target the loop does not model is refused."""
+    from spreadmap.loop import map_criteria
+
+    conv = schema["properties"]["converge"]["properties"]
+    s = map_criteria.settings({"map_error": {"tolerance": {"mfr": 0.02}}})
+    assert s["map_error"]["tolerance"] == {"mfr": 0.02, "pd": schema_defaults(conv["map_error"])["tolerance"]["pd"]}
+    assert s["map_error"]["margin"] == conv["map_error"]["properties"]["margin"]["default"]
+    with pytest.raises(ValueError, match="converge.map_error.tolerance"):
+        map_criteria.settings({"map_error": {"tolerance": {"coverage": 0.1}}}, targets=("mfr", "pd"))

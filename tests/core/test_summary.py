@@ -1,7 +1,7 @@
 """The run summary's counts and its readable text."""
 import pandas as pd
 
-from spreadmap.summary import run_summary, summary_text
+from spreadmap.run_report import run_summary, summary_text
 
 
 def test_counts_and_reasons_said_once():

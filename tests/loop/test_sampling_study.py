@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from spreadmap.design import bounds
-from spreadmap.experiments import plots as cp
+from spreadmap.experiments import experiment_plots as cp
 from spreadmap.experiments import sampling_study as ss
 
 

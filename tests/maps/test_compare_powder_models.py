@@ -1,15 +1,12 @@
 """tools/compare_powder_models.py on two synthetic band maps of known means and SDs: the change at a
 diameter is adhesive - dry, its SD the two SDs in quadrature, and the recommendations side by side."""
-import importlib.util
 
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import ROOT
+from conftest import script_module
 
-_spec = importlib.util.spec_from_file_location("compare_powder_models", ROOT / "tools" / "compare_powder_models.py")
-tool = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(tool)
+tool = script_module("tools/compare_powder_models.py")
 
 
 def band(offset: float, sd: float) -> pd.DataFrame:

@@ -9,7 +9,7 @@ from scipy.stats import norm
 from spreadmap import maps
 from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
-from spreadmap.maps import grids, machine, powder, regimes
+from spreadmap.maps import grids, machine, powder_maps, regimes
 from spreadmap.surrogate.models import GPModel
 from spreadmap.surrogate.saved_model import SurrogateModel
 
@@ -259,7 +259,7 @@ def test_powder_band_numbers_are_the_closed_form():
     interval change + (sd_high - sd_low) x (-1.96, 1.96) and P(increase) Phi(change / |sd change|)."""
     cf = ClosedForm()
     d, fv = np.array([12.0, 20.0, 31.0, 44.0]), np.array([0.15, 0.25, 0.45])
-    table = powder.powder_band_grid(cf, "pd", h_um=65, v_mm_s=10, d_values=d, f_values=fv, support=SUPPORT,
+    table = powder_maps.powder_band_grid(cf, "pd", h_um=65, v_mm_s=10, d_values=d, f_values=fv, support=SUPPORT,
                                     draws=20000)
     assert table[["f", "d_um"]].to_numpy().tolist() == [[f, x] for f in fv for x in d]
     assert (table["h_um"] == 65).all() and (table["v_mm_s"] == 10).all()
@@ -287,7 +287,7 @@ def test_powder_band_numbers_are_the_closed_form():
 
 def test_powder_cluster_numbers_are_the_closed_form():
     cf = ClosedForm()
-    grid = powder.powder_cluster_grid(cf, "coverage", h_um=60, v_mm_s=8, d_values=[15, 45], f_values=[0.2, 0.3, 0.4],
+    grid = powder_maps.powder_cluster_grid(cf, "coverage", h_um=60, v_mm_s=8, d_values=[15, 45], f_values=[0.2, 0.3, 0.4],
                                       support=SUPPORT)
     X = grid[list(NAMES)].to_numpy()
     assert X.tolist() == [[f, d, 60.0, 8.0] for f in (0.2, 0.3, 0.4) for d in (15.0, 45.0)]
@@ -363,8 +363,8 @@ def test_maps_redraw_from_their_csv(tmp_path):
     assert set(pd.read_csv(reg.paths["plane"])["floor"]) == {ROUGH}
 
     grid = pd.read_csv(mach.paths["csv"])
-    redrawn = [(band, powder.draw_powder_band_map(pd.read_csv(band.paths["csv"]), again / "band", "pd", SUPPORT, ROUGH)),
-               (cluster, powder.draw_powder_cluster_map(pd.read_csv(cluster.paths["csv"]), again / "cluster", "coverage",
+    redrawn = [(band, powder_maps.draw_powder_band_map(pd.read_csv(band.paths["csv"]), again / "band", "pd", SUPPORT, ROUGH)),
+               (cluster, powder_maps.draw_powder_cluster_map(pd.read_csv(cluster.paths["csv"]), again / "cluster", "coverage",
                                                         SUPPORT, ROUGH)),
                (mach, machine.draw_machine_map(grid, again / "machine", "pd", 0.3, 20.0, np.unique(grid["h_um"]),
                                                np.unique(grid["v_mm_s"]), SUPPORT, floor=ROUGH)),

@@ -2,14 +2,11 @@
 same simulation. Its re-runs are checked on the study's cases (docs/study/README.md); the rule
 itself, and that a raw record carries the parameters the tool re-renders from, by
 tests/case/test_stability_yade.py."""
-import importlib.util
 import json
 
-from conftest import ROOT
+from conftest import script_module
 
-spec = importlib.util.spec_from_file_location("reattribute_wedges", ROOT / "tools" / "reattribute_wedges.py")
-tool = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(tool)
+tool = script_module("tools/reattribute_wedges.py")
 
 
 def test_only_cases_flagged_for_their_overlap_alone_are_chosen():

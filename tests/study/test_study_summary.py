@@ -276,10 +276,10 @@ def test_the_workflows_convergence_summary_adds_to_the_rule_from_the_cases(tmp_p
 
 
 def test_a_second_heldout_check_is_reported_beside_the_first(tmp_path):
-    """heldout/ and heldout2/ each scored by spreadmap.surrogate.heldout.score on known truth: the
+    """heldout/ and heldout2/ each scored by spreadmap.surrogate.heldout_points.score on known truth: the
     summary states both, the second under its own heading, with counts computed here with numpy;
     a second check chosen but not yet scored says so."""
-    from spreadmap.surrogate.heldout import score
+    from spreadmap.surrogate.heldout_points import score
 
     rng = np.random.default_rng(11)
 

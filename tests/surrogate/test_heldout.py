@@ -1,11 +1,11 @@
-"""The held-out check (spreadmap.surrogate.heldout) on synthetic studies whose truth, model error
+"""The held-out check (spreadmap.surrogate.heldout_points) on synthetic studies whose truth, model error
 and run noise are known."""
 import numpy as np
 import pandas as pd
 import pytest
 
 from spreadmap.design import NAMES, to_unit
-from spreadmap.surrogate.heldout import choose_points, score
+from spreadmap.surrogate.heldout_points import choose_points, score
 
 RANGES = {"f": {"min": 0.15, "max": 0.45}, "d_um": {"min": 10, "max": 50}, "h_um": {"min": 55, "max": 75},
           "v_mm_s": {"min": 5, "max": 15}}

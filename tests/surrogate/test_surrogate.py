@@ -19,7 +19,7 @@ from conftest import ROOT
 from sklearn.model_selection import train_test_split
 
 from spreadmap.design import NAMES
-from spreadmap.surrogate import fitting, models, prediction, saved_model, settings, study, validation
+from spreadmap.surrogate import fitting, models, prediction, saved_model, settings, study_protocol, validation
 from spreadmap.surrogate.cli import cli_main
 from spreadmap.surrogate.training_rows import select
 
@@ -145,7 +145,7 @@ def test_case_noise_from_few_degree_of_freedom_sds_predicts_the_variance_not_its
     the geometric mean, exp(E ln s) = sigma exp((psi(1) - ln 1) / 2) = 0.75 sigma."""
     from scipy.special import digamma
 
-    from spreadmap.surrogate.noise import CaseNoise
+    from spreadmap.surrogate.noise_sd import CaseNoise
 
     rng = np.random.default_rng(8)
     Z = rng.normal(size=(4000, 4))
@@ -204,7 +204,7 @@ def test_study_protocol_is_the_studys(result):
     assert sorted(runs["neurons"].unique()) == QUICK["neurons"] and sorted(runs["seed"].unique()) == [0, 1, 2]
     tr, te = train_test_split(np.arange(48), test_size=0.2, random_state=0)
     assert (runs["n_test"] == len(te)).all() and (runs["n_train"] == len(tr)).all()
-    net = study.study_mlp(8, 3)
+    net = study_protocol.study_mlp(8, 3)
     assert net.regressor[-1].hidden_layer_sizes == (8,) and net.regressor[-1].random_state == 3
     assert type(net.regressor[0]).__name__ == type(net.transformer).__name__ == "StandardScaler"
 

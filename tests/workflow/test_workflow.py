@@ -4,13 +4,15 @@ import copy
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
+import sys
 import time
 
 import pandas as pd
 import pytest
-from conftest import FAST_SWEEP, SNAKEMAKE, deep_update, make_workflow, planned_jobs, snakemake, write_config
+from conftest import FAST_SWEEP, ROOT, SNAKEMAKE, deep_update, make_workflow, planned_jobs, snakemake, write_config
 
 pytestmark = pytest.mark.yade
 DROP = ("sweeps", "points")  # the tests give their own
@@ -77,6 +79,54 @@ def test_a_failed_case_is_recorded_with_its_reason_and_the_others_finish(tmp_pat
     assert "timed out" in summary["sets"]["points"]["problems"][0]["reason"]
     text = (wf / "results" / "sweeps_summary.txt").read_text()
     assert re.search(r"broken-f0\.3000-d20\.000-h60\.000-v5\.0000-s1-[0-9a-f]{8}: failed: timed out", text), text
+
+
+@pytest.mark.faults
+def test_failed_cases_archived_by_retry_failed_run_again_and_finish(tmp_path):
+    """The real YADE under a 1 s CPU limit (prlimit, named by SPREADMAP_YADE: the machine kills it,
+    as a killed node would) crashes twice per case and both cases are recorded as failed;
+    tools/retry_failed.py lists them with their reasons, --archive moves each one's record and log
+    into failed-1/, and the same command without the limit runs the same case ids again to ok.
+    The archived logs are kept. (The target is the cases' table: `sweeps` would also run the study
+    rule, which cannot run on no usable case.)"""
+    wf = make_workflow(tmp_path, lds_only([2]), DROP)
+    table = "results/tables/lds.csv"
+    limited = tmp_path / "yade-1s-cpu"
+    limited.write_text(f"#!/bin/sh\nexec prlimit --cpu=1 {shutil.which('yade')} \"$@\"\n")
+    limited.chmod(0o755)
+    first = subprocess.run([SNAKEMAKE, table], cwd=wf, capture_output=True, text=True, timeout=300,
+                           env={**os.environ, "SPREADMAP_YADE": str(limited)})
+    assert first.returncode == 0, first.stderr[-3000:]  # recorded, not fatal
+    raws = raw_files(wf)
+    assert len(raws) == 2 and all(json.loads(p.read_text())["status"] == "failed" for p in raws.values())
+    tool = [sys.executable, str(ROOT / "tools" / "retry_failed.py"), str(wf)]
+    listed = subprocess.run(tool, capture_output=True, text=True, timeout=60)
+    assert listed.returncode == 0 and "2 failed case(s)" in listed.stdout, listed.stdout + listed.stderr
+    for case_id in raws:
+        assert re.search(rf"^{re.escape(case_id)}: yade exited with code -\d+ \(crashed\)", listed.stdout, re.M), listed.stdout
+    assert all(p.exists() for p in raws.values())  # listing moves nothing
+
+    archived = subprocess.run([*tool, "--archive"], capture_output=True, text=True, timeout=60)
+    assert archived.returncode == 0, archived.stderr
+    logs = {}
+    for case_id, raw_path in raws.items():
+        archive = raw_path.parent / "failed-1"
+        assert not raw_path.exists() and json.loads((archive / "raw.json").read_text())["status"] == "failed"
+        assert (raw_path.parent / "case.py").exists() and not (raw_path.parent / "run.log").exists()
+        logs[case_id] = (archive / "run.log").read_text()
+    assert planned_jobs(snakemake(wf, table, "-n").stdout) == {}  # a missing record alone: not re-made
+    command = re.search(r"^  snakemake TARGET (--forcerun .*)$", archived.stdout, re.M).group(1).split()
+    assert sorted(command[1:]) == sorted(str(p.relative_to(wf)) for p in raws.values())
+    assert planned_jobs(snakemake(wf, table, *command, "-n").stdout)["run_case"] == 2
+
+    again = snakemake(wf, table, *command)
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert set(raw_files(wf)) == set(raws)  # the same case ids, run again
+    assert all(json.loads(p.read_text())["status"] == "ok" for p in raws.values())
+    assert (pd.read_csv(wf / table)["status"] == "ok").all()
+    for case_id, raw_path in raws.items():  # each failure's log kept beside the new run's
+        assert (raw_path.parent / "failed-1" / "run.log").read_text() == logs[case_id] != ""
+    assert "no failed cases" in subprocess.run(tool, capture_output=True, text=True, timeout=60).stdout
 
 
 @pytest.mark.faults

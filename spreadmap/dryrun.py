@@ -1,4 +1,5 @@
-"""Reading Snakemake's dry-run output (`snakemake -n`): the jobs it plans, per rule."""
+"""Reading Snakemake's dry-run output (`snakemake -n`): the jobs it plans, per rule (for the
+workflow's tests and benchmarks/main_job.py)."""
 from __future__ import annotations
 
 
