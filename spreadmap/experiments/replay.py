@@ -34,6 +34,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from .. import targets as registry
 from ..case.scene import precision_target
 from ..design import NAMES, Design
 from ..loop import map_criteria
@@ -42,7 +43,7 @@ from ..loop.model import make_map_fit
 from ..loop.stepper import step
 from ..sampling import halton
 
-TARGETS = ("mfr", "pd")
+TARGETS = registry.names("base")  # mfr, pd
 
 
 def passed_spheres(X: np.ndarray, mfr: np.ndarray, preset: Mapping, config: Mapping) -> np.ndarray:

@@ -65,7 +65,7 @@ import pandas as pd
 from scipy import stats
 from sklearn.model_selection import KFold
 
-from ..design import NAMES, Design
+from ..design import NAMES, TARGETS, Design
 from ..schema import checked
 from ..study_rule.rule import DEFAULT_FLOORS, STATISTICS
 from .model import FitFunction, MapModel, table_data, usable_rows
@@ -271,7 +271,7 @@ def map_statistics(model: MapModel, box: np.ndarray, draws: int = 64, seed: int 
 # ----------------------------------------------------------------------------------------------
 # all three at one batch
 # ----------------------------------------------------------------------------------------------
-def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("mfr", "pd"),
+def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = TARGETS,
              prev_table: pd.DataFrame | None = None, grids: Mapping[str, np.ndarray] | None = None,
              cfg: Mapping | None = None, seed: int = 0,
              floors: Mapping[str, float] | None = None,

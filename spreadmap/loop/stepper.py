@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from ..case.identity import rounded
-from ..design import NAMES, Design
+from ..design import NAMES, TARGETS, Design
 from ..sampling import halton
 from ..schema import checked
 from ..study_rule.rule import DEFAULT_TOLERANCE, batches_until_converged
@@ -85,7 +85,7 @@ def _study_rule(table: pd.DataFrame, targets: Sequence[str], s: Mapping, n: int,
 
 def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | None = None,
          fit: FitFunction | None = None, ranges: Design | Mapping | None = None, maps_cfg: Mapping | None = None,
-         lds_seed: int = 42, targets: Sequence[str] = ("mfr", "pd"),
+         lds_seed: int = 42, targets: Sequence[str] = TARGETS,
          tolerance: float = DEFAULT_TOLERANCE, floors: Mapping | None = None,
          cost: Callable[[np.ndarray], np.ndarray] | None = None,
          models_out: dict | None = None) -> dict[str, Any]:

@@ -13,6 +13,7 @@ import pandas as pd  # noqa: E402
 from matplotlib import colors as mcolors  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
+from .. import targets as registry  # noqa: E402
 from ..design import BY_NAME, NAMES, Design  # noqa: E402
 from ..figures import save_figure  # noqa: E402
 from ..table import usable  # noqa: E402
@@ -34,7 +35,7 @@ def usable_cases(cases: pd.DataFrame) -> pd.DataFrame:
         The rows kept, with `cases`' index and columns.
     """
     keep = usable(cases)
-    for t in ("mfr", "pd"):
+    for t in registry.names("base"):
         if t in cases:
             keep &= np.isfinite(cases[t].to_numpy(float))
     return cases.loc[keep]
@@ -133,7 +134,7 @@ def parallel_coordinates(
     x = design.to_unit(data[list(NAMES)].to_numpy(float))
     for k, n in enumerate(NAMES):
         data[f"{n}_norm"] = x[:, k]
-    for t in ("mfr", "pd"):
+    for t in registry.names("base"):
         z = data[t].to_numpy(float)
         span = np.ptp(z)
         data[f"{t}_norm"] = (z - z.min()) / span if span > 0 else 0.5
@@ -143,7 +144,8 @@ def parallel_coordinates(
     xpos = np.arange(len(NAMES), dtype=float)
     fig, axes = plt.subplots(2, 1, figsize=(12, 8.5), sharex=True)
     cmap = plt.get_cmap("viridis")
-    for ax, t, name in ((axes[0], "mfr", "MFR"), (axes[1], "pd", "PD")):
+    for ax, t in zip(axes, registry.names("base")):
+        name = registry.short(t)
         c = data[f"{t}_norm"].to_numpy(float)
         order = np.argsort(c)  # high values drawn last, on top
         segs = [np.column_stack([xpos, row]) for row in x[order]]
@@ -186,7 +188,7 @@ def parallel_coordinates(
                  fontsize=11)
     fig.tight_layout()
     cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
-        "mfr", "pd"] + [f"{n}_norm" for n in NAMES] + ["mfr_norm", "pd_norm", "best"]
+        *registry.names("base")] + [f"{n}_norm" for n in NAMES] + [f"{t}_norm" for t in registry.names("base")] + ["best"]
     table = data[cols].reset_index(drop=True)
     paths = save_figure(fig, path_stem, table, floor)
     return MapResult(paths, table, {"best": best})

@@ -71,6 +71,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as _st
 
+from .. import targets as registry
 from ..schema import checked
 from ..table import usable as usable_rows
 
@@ -80,7 +81,7 @@ TINY = 1e-12  # a scale below which a spread is taken for none
 DEFAULT_FLOORS: dict[str, float] = checked("convergence")["floors"]
 DEFAULT_TOLERANCE = checked("convergence")["tolerance"]
 NOT_CONVERGED = "not converged within the cases run"
-DEFAULT_TARGETS: tuple[str, ...] = ("mfr", "pd")
+DEFAULT_TARGETS: tuple[str, ...] = registry.names("base")  # mfr, pd (spreadmap.targets)
 
 
 # ----------------------------------------------------------------------------------------------

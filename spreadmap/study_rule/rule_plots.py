@@ -15,11 +15,11 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import NullFormatter
 
+from .. import targets as registry
 from ..figures import N_LABEL, new_figure, save_figure
 from ..table import usable
 from . import rule as cv
 
-TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
 STAT_LABELS = {
     "mean": "mean [-]",
     "std": "standard deviation (ddof=1) [-]",
@@ -30,7 +30,7 @@ STAT_LABELS = {
 
 
 def _label(target: str) -> str:
-    return TARGET_LABELS.get(target, f"{target} [-]")
+    return f"{registry.short(target)} [{registry.REGISTRY[target].unit}]" if target in registry.REGISTRY else f"{target} [-]"
 
 
 # ----------------------------------------------------------------------------------------------
