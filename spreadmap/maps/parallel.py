@@ -16,29 +16,9 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from .. import targets as registry  # noqa: E402
 from ..design import BY_NAME, NAMES, Design  # noqa: E402
 from ..figures import save_figure  # noqa: E402
-from ..table import usable  # noqa: E402
+from ..table import usable_cases  # noqa: E402
 from .style import MapResult  # noqa: E402
 from .style import fmt as _fmt
-
-
-def usable_cases(cases: pd.DataFrame) -> pd.DataFrame:
-    """Cases fit for statistics: usable (``spreadmap.table.usable``), with finite MFR and PD where present.
-
-    Parameters
-    ----------
-    cases : pandas.DataFrame
-        A results table.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The rows kept, with `cases`' index and columns.
-    """
-    keep = usable(cases)
-    for t in registry.names("base"):
-        if t in cases:
-            keep &= np.isfinite(cases[t].to_numpy(float))
-    return cases.loc[keep]
 
 
 def best_case(
@@ -91,7 +71,7 @@ def parallel_coordinates(
 ) -> MapResult:
     """Parallel coordinates of a sample of DEM cases (the converged LDS sample).
 
-    Only usable cases (``usable_cases``) are drawn. Axes: the four parameters, each normalised to
+    Only usable cases with finite MFR and PD (``table.usable_cases``) are drawn. Axes: the four parameters, each normalised to
     its design range and ticked in physical units. Top panel coloured by normalised MFR, bottom by
     normalised PD (min-max over the drawn cases; the colour bars give the physical values too).
     The best case (``best_case``: ``mfr_min`` and ``score``) is drawn thick red and annotated.
@@ -125,7 +105,7 @@ def parallel_coordinates(
     ValueError
         If no case is usable, or none qualifies as the best (``best_case``).
     """
-    data = usable_cases(cases).copy()
+    data = usable_cases(cases, [t for t in registry.names("base") if t in cases]).copy()
     if data.empty:
         raise ValueError("no usable case to draw")
     best = best_case(data, mfr_min=mfr_min, score=score)

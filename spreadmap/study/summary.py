@@ -24,9 +24,8 @@ from spreadmap.case.substrate import floor_label
 from spreadmap.design import NAMES, bounds
 from spreadmap.design import h_over_d as gap_ratio
 from spreadmap.loop.stepper import step_number
-from spreadmap.surrogate.training_rows import partition
 from spreadmap.surrogate.validation import by_band
-from spreadmap.table import flagged, usable
+from spreadmap.table import flagged, partition, usable
 
 NOT_YET = "not yet run"
 

@@ -73,6 +73,7 @@ from scipy import stats as _st
 
 from .. import targets as registry
 from ..schema import checked
+from ..table import partition
 from ..table import usable as usable_rows
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")
@@ -170,7 +171,8 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
                       partition_col: str | None = None) -> pd.DataFrame:
     """Statistics, changes and the criterion for each partition of one sweep.
 
-    Prefix mode (default, LDS): partition N = the first N rows in ``order_col`` order;
+    Prefix mode (default, LDS): partition N = the cases at positions 0 .. N-1 of the sequence
+    (``table.partition``: ``order_col`` below N), which must all be rows of the table;
     ``partitions`` defaults to multiples of 100 up to the number of rows (plus the total).
     Group mode (``partition_col`` set, lattices): each value of ``partition_col`` is one
     partition, N = its number of rows, partitions are ordered by N.
@@ -205,8 +207,8 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
     Raises
     ------
     ValueError
-        If the table holds several sweeps, two groups have the same size, or a partition lies
-        outside 1..len(table).
+        If the table holds several sweeps, two groups have the same size, a partition lies
+        outside 1..len(table), or a prefix partition does not hold its N positions once each.
     """
     if "sweep" in table.columns and table["sweep"].nunique() > 1:
         raise ValueError("table holds several sweeps; filter it to one sweep first")
@@ -231,7 +233,11 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
         parts = sorted({int(p) for p in partitions})
         if parts and (parts[0] < 1 or parts[-1] > n_total):
             raise ValueError(f"partitions must lie in 1..{n_total}, got {parts}")
-        groups = [(n, None, work.iloc[:n]) for n in parts]
+        groups = [(n, None, partition(work, n, sweep=None, order_col=order_col)) for n in parts]
+        short = [(n, len(g)) for n, _, g in groups if len(g) != n]
+        if short:
+            raise ValueError(f"partitions (N, rows with {order_col} < N) {short}: the sequence's positions are "
+                             f"not 0 .. N-1 each once; a missing case must still have its row (status failed)")
 
     rows = []
     prev = None
