@@ -28,7 +28,7 @@ converges.  The rule used here is
 
     change = |curr - prev| / max(|prev|, floor[statistic])
 
-with the floors of ``DEFAULT_FLOORS`` (the schema's ``convergence.floors``):
+with the floors of ``DEFAULT_FLOORS`` (the schema's ``study_rule.floors``):
 
 * ``skewness`` and ``kurtosis``: floor **1.0**.  Both are dimensionless standardised moments whose
   natural unit is 1 (a distribution with |skewness| or |excess kurtosis| below 1 is "moderately"
@@ -78,9 +78,9 @@ from ..table import usable as usable_rows
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")
 TINY = 1e-12  # a scale below which a spread is taken for none
-# the schema's convergence.floors and convergence.tolerance, for callers without a config
-DEFAULT_FLOORS: dict[str, float] = checked("convergence")["floors"]
-DEFAULT_TOLERANCE = checked("convergence")["tolerance"]
+# the schema's study_rule.floors and study_rule.tolerance, for callers without a config
+DEFAULT_FLOORS: dict[str, float] = checked("study_rule")["floors"]
+DEFAULT_TOLERANCE = checked("study_rule")["tolerance"]
 NOT_CONVERGED = "not converged within the cases run"
 DEFAULT_TARGETS: tuple[str, ...] = registry.names("base")  # mfr, pd (spreadmap.targets)
 
