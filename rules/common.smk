@@ -126,7 +126,7 @@ if config.get("fidelity"):
 
 
 GROW = config["converge"]
-CONV = config["convergence"]
+STUDY_RULE = config["study_rule"]  # the study's five-statistic rule (`converge:`, GROW: the main job's loop)
 
 
 # `snakemake converge` (rules/converge.smk): following its checkpoints

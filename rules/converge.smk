@@ -12,8 +12,8 @@ checkpoint converge_step:
         step="results/converge/step_{n}.json",
     params:
         converge=GROW,
-        tolerance=CONV["tolerance"],
-        floors=CONV["floors"],
+        tolerance=STUDY_RULE["tolerance"],
+        floors=STUDY_RULE["floors"],
         ranges=RANGES,
         maps=config["maps"],
         lds_seed=SWEEPS["lds"]["seed"] if "lds" in SWEEPS else None,  # no LDS sweep: no LDS sequence to start from

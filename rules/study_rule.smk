@@ -12,9 +12,9 @@ rule convergence:
                           category="Convergence"),
     params:
         partitions=SWEEPS["lds"]["partitions"] if "lds" in SWEEPS else [],  # no LDS sweep: no partitions
-        tolerance=CONV["tolerance"],
-        floors=CONV["floors"],
-        window=CONV["window"],
+        tolerance=STUDY_RULE["tolerance"],
+        floors=STUDY_RULE["floors"],
+        window=STUDY_RULE["window"],
         floor=FLOOR,
     log:
         "logs/convergence.log",
@@ -36,9 +36,9 @@ rule sampling_study:
         figure=report("results/convergence/sampling_study.png", caption="captions/sampling_study.rst",
                       category="Convergence"),
     params:
-        study=CONV["sampling_study"],
-        tolerance=CONV["tolerance"],
-        floors=CONV["floors"],
+        study=STUDY_RULE["sampling_study"],
+        tolerance=STUDY_RULE["tolerance"],
+        floors=STUDY_RULE["floors"],
         ranges=RANGES,
     log:
         "logs/sampling_study.log",

@@ -4,13 +4,14 @@ from pathlib import Path
 import pandas as pd
 
 from spreadmap import maps, sensitivity
-from spreadmap.design import Design
+from spreadmap.design import TARGETS, Design
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.noise_law.apply import case_noise
 from spreadmap.records import read_table
 from spreadmap.surrogate import load_model
 from spreadmap.surrogate.settings import map_config
+from spreadmap.table import usable_cases
 
 log_to(snakemake)  # noqa: F821
 
@@ -21,7 +22,7 @@ cfg = map_config(p.maps)
 out = Path(sm.output.ranking).parent
 model = load_model(sm.input.model)
 cases = case_noise(read_table(sm.input.table), p.noise_model, p.noise_calibration, p.counting_c)  # noise_model, noise_calibration
-usable = maps.usable_cases(cases)
+usable = usable_cases(cases, [t for t in TARGETS if t in cases])  # the usable cases with finite MFR and PD
 y = cfg["machine"]["y"]
 auto_y, scores = maps.choose_machine_y(usable, model.targets)
 # each candidate's information beyond MFR and its r with MFR

@@ -31,9 +31,12 @@ Where each concept is held (one module each):
 * the published study: ``study`` (``cases``, ``summary``, ``restore``, ``checksums``)
 * design space: ``design.Design``, built once from the config (``Design.from_config``): names,
   ranges, to / from the unit cube, axes; h/d (``design.h_over_d``); every ``ranges`` argument takes it
-* results table, usable cases: ``table`` (build_table; ``usable`` = finished and not flagged,
-  ``usable_cases`` its rows); the noise SDs every analysis weighs cases by: ``noise_law.apply.case_noise``
-* partitions (the LDS prefix ``index < n``): ``surrogate.training_rows.partition``; the study
+* targets (name, labels, unit, SD and count columns, kind): ``targets`` (``REGISTRY``; read by
+  metrics, surrogate, maps, decisions and the explorer)
+* results table, usable cases: ``table`` (build_table; ``usable`` = finished, not flagged and finite in
+  the columns asked, the one rule every reader calls; ``usable_cases`` its rows); the noise SDs
+  every analysis weighs cases by: ``noise_law.apply.case_noise``
+* partitions (the LDS prefix ``index < n``): ``table.partition``; the study
   rule's statistics per partition: ``study_rule.rule``
 * atomic writing: ``files`` (write_text_atomically, atomic_path); reading the workflow's files
   without taking a damaged one for data: ``records``

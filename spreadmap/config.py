@@ -4,6 +4,7 @@ the bad value and what is allowed, in one line."""
 from __future__ import annotations
 
 import copy
+import warnings
 from pathlib import Path
 
 import jsonschema
@@ -79,10 +80,52 @@ def _yaml_float(value) -> str | None:
     return f"{mantissa}e{exponent}"
 
 
+# config sections renamed so that the names say which is which: old name -> new name (the old one
+# is still read, with a warning naming both)
+RENAMED_SECTIONS = {"convergence": "study_rule"}
+RENAME_REASONS = {"convergence": "the study's five-statistic rule; `converge:` stays the main job's loop"}
+
+
+def renamed_sections(config: dict) -> dict:
+    """Move the sections under an old name (``RENAMED_SECTIONS``) to their new name, in place,
+    with a FutureWarning naming the old and the new key.
+
+    Called by ``validate`` (so every config the workflow reads) and by readers of published
+    configs that are not validated (``spreadmap.study.summary``).
+
+    Parameters
+    ----------
+    config : dict
+        A configuration as read from YAML; changed in place.
+
+    Returns
+    -------
+    dict
+        The same config, with the new names only.
+
+    Raises
+    ------
+    ConfigError
+        If a section is given under both its old and its new name.
+    """
+    for old, new in RENAMED_SECTIONS.items():
+        if old not in config:
+            continue
+        if new in config:
+            raise ConfigError(f"config has both '{old}:' and '{new}:'; '{old}:' is the old name of '{new}:' "
+                              f"({RENAME_REASONS[old]}): keep '{new}:' only")
+        warnings.warn(f"config key '{old}:' is deprecated, read as '{new}:' ({RENAME_REASONS[old]}); "
+                      f"rename it to '{new}:'", FutureWarning, stacklevel=2)
+        config[new] = config.pop(old)
+    return config
+
+
 def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
     """Validate `config` in place with Snakemake's validator (defaults filled), then the cross-key rules.
 
-    The schema (schemas/config.schema.yaml) fills every default it has; the cross-key rules are the
+    A section under its old name (``RENAMED_SECTIONS``: ``convergence`` -> ``study_rule``) is
+    first moved to its new one, with a warning. The schema (schemas/config.schema.yaml) fills every
+    default it has; the cross-key rules are the
     checks a schema cannot express (the presets named exist, ranges with min below max, noise
     calibration regions that are not empty, the noise model's sections, the pictures' points, the
     surrogate, decisions and fidelity sections, the PD box against the blade).
@@ -102,11 +145,13 @@ def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
     Raises
     ------
     ConfigError
-        With a one-line message naming the key, the bad value and what is allowed.
+        With a one-line message naming the key, the bad value and what is allowed (or a section
+        given under both its old and its new name).
     """
     from snakemake.exceptions import WorkflowError
     from snakemake.utils import validate as snakemake_validate
 
+    renamed_sections(config)
     try:
         snakemake_validate(config, str(schema_path), set_default=True)
     except WorkflowError:

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .targets import names as target_names
+
 
 @dataclass(frozen=True)
 class Parameter:
@@ -34,7 +36,7 @@ PARAMETERS: tuple[Parameter, ...] = (
 )
 NAMES: tuple[str, ...] = tuple(p.name for p in PARAMETERS)
 BY_NAME: dict[str, Parameter] = {p.name: p for p in PARAMETERS}
-TARGETS: tuple[str, ...] = ("mfr", "pd")
+TARGETS: tuple[str, ...] = target_names("base")  # mfr, pd (spreadmap.targets)
 
 
 @dataclass(frozen=True)

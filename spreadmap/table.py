@@ -31,42 +31,87 @@ def flagged(table: pd.DataFrame) -> np.ndarray:
     return table["flagged"].fillna(False).astype(bool).to_numpy()
 
 
-def usable(table: pd.DataFrame) -> np.ndarray:
-    """Rows fit for statistics and training: finished (status ok) and not flagged by a stability
-    bound.
+def usable(table: pd.DataFrame, columns=()) -> np.ndarray:
+    """The one rule of a usable case: finished (status ok) and not flagged by a stability bound,
+    and, for each of `columns` given, a finite value.
 
-    Columns that are absent impose nothing.
+    Every reader of the table takes its cases through this rule (the surrogate's training rows,
+    the loop's map model, the maps, the study rule, the noise law, the fidelity factors); a column
+    ``status`` or ``flagged`` that is absent imposes nothing.
 
     Parameters
     ----------
     table : pandas.DataFrame
         The results table (one row per case); ``status`` and ``flagged`` are read if present.
+    columns : iterable of str, optional
+        Columns that must hold a finite number (e.g. the targets a model is fitted on, the
+        design's inputs); text and empty cells count as not finite. Default: none.
 
     Returns
     -------
     numpy.ndarray
         Boolean mask, one entry per row of `table`.
+
+    Raises
+    ------
+    ValueError
+        If a column of `columns` is not in `table`; the message names it.
     """
+    columns = list(columns)
+    missing = [c for c in columns if c not in table.columns]
+    if missing:
+        raise ValueError(f"usable cases: the results table lacks column(s) {missing}")
     ok = ~flagged(table)
     if "status" in table.columns:
         ok &= (table["status"] == "ok").to_numpy()
+    for c in columns:
+        ok &= np.isfinite(pd.to_numeric(table[c], errors="coerce").to_numpy(float))
     return ok
 
 
-def usable_cases(table: pd.DataFrame) -> pd.DataFrame:
-    """The rows of a results table that ``usable`` keeps (finished, not flagged), in their order.
+def usable_cases(table: pd.DataFrame, columns=()) -> pd.DataFrame:
+    """The rows of a results table that ``usable`` keeps, in their order.
 
     Parameters
     ----------
     table : pandas.DataFrame
         The results table (one row per case).
+    columns : iterable of str, optional
+        Columns that must hold a finite number (``usable``); default: none.
 
     Returns
     -------
     pandas.DataFrame
         The usable rows, with `table`'s index and columns.
     """
-    return table[usable(table)]
+    return table[usable(table, columns)]
+
+
+def partition(table: pd.DataFrame, n: int, sweep: str | None = "lds", order_col: str = "index") -> pd.DataFrame:
+    """The one partition of a sequence: its first n cases, the rows of `sweep` whose `order_col`
+    is below n (LDS-n), in that order.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A results table.
+    n : int
+        The partition's size: the cases of positions 0 .. n-1 of the sequence.
+    sweep : str or None, optional
+        Only the rows of this sweep (where the table has a ``sweep`` column); None: every row.
+    order_col : str, optional
+        The column holding each case's position in the sequence (0-based).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The partition's rows (all of them, usable or not), sorted by `order_col`, index reset.
+    """
+    rows = table
+    if sweep is not None and "sweep" in table.columns:
+        rows = rows[rows["sweep"].astype(str) == sweep]
+    rows = rows[rows[order_col].astype(int) < int(n)]
+    return rows.sort_values(order_col, kind="stable").reset_index(drop=True)
 
 
 def read_benchmark(path: Path | str) -> dict:

@@ -26,6 +26,7 @@ import pandas as pd
 
 from spreadmap.case.substrate import FLAT, ROUGH, floor_label, floor_of, mean_hollow_depth
 from spreadmap.config import load
+from spreadmap.design import TARGETS
 from spreadmap.maps.floors import box_sample, by_band, compare
 from spreadmap.maps.floors_plot import plot_ratio_box, plot_side_by_side
 from spreadmap.maps.grids import grid_frame, values
@@ -33,7 +34,6 @@ from spreadmap.surrogate import load_model
 
 ROOT = Path(__file__).resolve().parent.parent
 
-TARGETS = ("mfr", "pd")
 
 
 def run_of(path: Path) -> tuple[object, dict, str]:

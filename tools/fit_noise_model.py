@@ -25,14 +25,14 @@ import yaml
 from spreadmap import config as spreadmap_config
 from spreadmap.case.substrate import floor_label
 from spreadmap.metrics.noise import calibration_factors
-from spreadmap.noise_law.cells import OTHER_ARMS, published_cells
+from spreadmap.noise_law.cells import COUNT, OTHER_ARMS, published_cells
 from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval
 from spreadmap.noise_law.leave_one_out import leave_point_out, predictive_check, scored
 from spreadmap.noise_law.plot import law_figure
 
 ROOT = Path(__file__).resolve().parent.parent
 
-TARGETS = ("mfr", "pd")
+TARGETS = tuple(COUNT)  # mfr, pd: the targets with a count (spreadmap.targets)
 BANDS = ((0.0, 2.0, "h/d < 2"), (2.0, 3.0, "2 <= h/d < 3"), (3.0, math.inf, "h/d >= 3"))
 EXTRA_TERMS = ("ln_hd_sq", "ln_h", "ln_value", "ln_v", "f", "variant:smoke", "variant:fast", "variant:reference",
                "variant:window8", "source:study", "source:fidelity_knobs")

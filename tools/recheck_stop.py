@@ -46,8 +46,8 @@ def recheck(table: pd.DataFrame, cfg: dict, last: dict, previous: dict, calibrat
     noisy = case_noise(table, noise_model, calibration, cfg["metrics"]["counting_noise_c"])
     return step(noisy, n, cfg["converge"], previous,
                 fit=make_map_fit(cfg["surrogate"], final=True), ranges=cfg["ranges"], maps_cfg=cfg["maps"],
-                lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["convergence"]["tolerance"],
-                floors=cfg["convergence"].get("floors"), cost=PlannedCost.from_config(cfg))
+                lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["study_rule"]["tolerance"],
+                floors=cfg["study_rule"].get("floors"), cost=PlannedCost.from_config(cfg))
 
 
 def cv_lines(name: str, record: dict) -> list[str]:

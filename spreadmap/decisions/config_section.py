@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from .. import targets as registry
 from ..design import NAMES, bounds
 from ..schema import checked
-from ..surrogate.settings import BASE_TARGETS, LAYER_TARGETS
 
 
 class DecisionError(ValueError):
@@ -46,7 +46,7 @@ def span(value) -> tuple[float, float]:
 def possible_targets(config: Mapping) -> list[str]:
     """The targets the surrogate can have under this (validated) config's ``surrogate.targets``."""
     spec = config["surrogate"]["targets"]
-    return list((*BASE_TARGETS, *LAYER_TARGETS)) if spec == "auto" else list(spec)
+    return list(registry.names()) if spec == "auto" else list(spec)
 
 
 def problems(config: Mapping) -> list[str]:

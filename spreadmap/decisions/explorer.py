@@ -27,7 +27,8 @@ import pandas as pd
 from ..design import NAMES
 from ..files import write_text_atomically
 from ..maps import grids
-from ..maps.style import LABELS, SHORT, support_rule
+from ..maps.style import support_rule
+from ..targets import axis_label, short
 from .feasibility import Powder, feasibility
 from .figure import bounds_text
 
@@ -60,8 +61,8 @@ def explorer_data(model, dec: dict, support: dict) -> dict:
     half_d = (ds[1] - ds[0]) / 2 if len(ds) > 1 else np.inf
     near = [[int(k) for k in np.nonzero((np.abs(cases[:, 0] - f) <= half_f) & (np.abs(cases[:, 1] - d) <= half_d))[0]]
             for f in fs for d in ds]
-    return {"targets": targets, "labels": {t: LABELS.get(t, t) for t in targets},
-            "short": {t: SHORT.get(t, t) for t in targets},
+    return {"targets": targets, "labels": {t: axis_label(t) for t in targets},
+            "short": {t: short(t) for t in targets},
             "f": fs.tolist(), "d": ds.tolist(), "h": hs.tolist(), "v": vs.tolist(),
             "mean": {t: _round(ev[t]) for t in targets}, "model_sd": {t: _round(ev[f"{t}_model_sd"]) for t in targets},
             "run_sd": {t: _round(ev[f"{t}_run_sd"]) for t in targets},

@@ -8,7 +8,8 @@ import pandas as pd
 from matplotlib.patches import Patch
 
 from ..figures import new_figure, save_figure
-from ..maps.style import HATCH, SHORT, support_rule
+from ..maps.style import HATCH, support_rule
+from ..targets import short
 
 MARKS = {"fastest": dict(marker="^", color="#d62728", label="fastest"),
          "best_quality": dict(marker="*", color="#1f77b4", label="best quality")}
@@ -22,7 +23,7 @@ def _cell_edges(values: np.ndarray) -> np.ndarray:
 def bounds_text(bounds: dict) -> str:
     parts = []
     for t, b in bounds.items():
-        name = SHORT.get(t, t)
+        name = short(t)
         if "min" in b and "max" in b:
             parts.append(f"{b['min']:g} <= {name} <= {b['max']:g}")
         elif "min" in b:

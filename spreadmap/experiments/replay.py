@@ -34,6 +34,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from .. import targets as registry
 from ..case.scene import precision_target
 from ..design import NAMES, Design
 from ..loop import map_criteria
@@ -41,8 +42,9 @@ from ..loop.cost import PlannedCost
 from ..loop.model import make_map_fit
 from ..loop.stepper import step
 from ..sampling import halton
+from ..table import usable_cases
 
-TARGETS = ("mfr", "pd")
+TARGETS = registry.names("base")  # mfr, pd
 
 
 def passed_spheres(X: np.ndarray, mfr: np.ndarray, preset: Mapping, config: Mapping) -> np.ndarray:
@@ -131,7 +133,7 @@ def build_world(published: pd.DataFrame, config: Mapping, law: Mapping, rho: flo
         truth[t] = fit(X, y, sd)
         noise[t] = truth[t]  # its per-case noise model: CaseNoise fitted on the same SDs
     return World(truth, noise, config, dict(law), rho,
-                 [f"truth and noise law fitted on {len(map_criteria.usable_rows(published, 'mfr'))} usable cases"])
+                 [f"truth and noise law fitted on {len(usable_cases(published, ['mfr']))} usable cases"])
 
 
 def true_error(model_by_target: Mapping, world: World, grids: Mapping[str, np.ndarray]) -> dict:

@@ -30,10 +30,11 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from .. import targets as registry
 from ..design import h_over_d
 from ..table import usable_cases as usable
 
-TARGETS = ("mfr", "pd")
+TARGETS = registry.names("base")  # mfr, pd
 
 
 def pairs(table: pd.DataFrame, preset: str, reference: str, targets=TARGETS) -> pd.DataFrame:

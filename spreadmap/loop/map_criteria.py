@@ -65,10 +65,11 @@ import pandas as pd
 from scipy import stats
 from sklearn.model_selection import KFold
 
-from ..design import NAMES, Design
+from ..design import NAMES, TARGETS, Design
 from ..schema import checked
 from ..study_rule.rule import DEFAULT_FLOORS, STATISTICS
-from .model import FitFunction, MapModel, table_data, usable_rows
+from ..table import usable_cases
+from .model import FitFunction, MapModel, table_data
 
 CRITERIA: tuple[str, ...] = ("map_error", "cv_rmse", "map_change", "ci")
 MIN_CASES = 5  # usable cases a target needs before its model is fitted and the criteria evaluated
@@ -271,7 +272,7 @@ def map_statistics(model: MapModel, box: np.ndarray, draws: int = 64, seed: int 
 # ----------------------------------------------------------------------------------------------
 # all three at one batch
 # ----------------------------------------------------------------------------------------------
-def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("mfr", "pd"),
+def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = TARGETS,
              prev_table: pd.DataFrame | None = None, grids: Mapping[str, np.ndarray] | None = None,
              cfg: Mapping | None = None, seed: int = 0,
              floors: Mapping[str, float] | None = None,
@@ -301,7 +302,7 @@ def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = ("m
         out["models"][t] = model
         noise = float(np.sqrt(np.mean(sd**2))) if sd is not None else float(model.noise_sd)
         source = "per-case noise of the table" if sd is not None else "the model's fitted noise"
-        scored = None if stats_table is None else usable_rows(table, t).index.isin(usable_rows(stats_table, t).index)
+        scored = None if stats_table is None else usable_cases(table, [t]).index.isin(usable_cases(stats_table, [t]).index)
         c = cv_rmse(X, y, sd, fit, folds=int(s["cv_rmse"]["folds"]), seed=seed,
                     scored=None if scored is None or not scored.any() else scored)
         cv_noise = c["heldout_noise_sd"] if sd is not None else noise  # the scored cases' noise

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from ..design import NAMES
-from ..table import usable
+from ..table import usable_cases
 
 MODEL_KINDS = ("gp", "mlp")
 
@@ -153,20 +153,14 @@ def make_map_fit(surrogate_cfg: Mapping | None = None, final: bool = False) -> F
     return fit
 
 
-def usable_rows(table: pd.DataFrame, target: str) -> pd.DataFrame:
-    """The rows of a results table a model of ``target`` is fitted on: usable, target finite."""
-    ok = usable(table) & np.isfinite(pd.to_numeric(table[target], errors="coerce")).to_numpy()
-    return table[ok]
-
-
 def table_data(table: pd.DataFrame, target: str) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """(X, y, per-case noise SD or None) of the usable rows of a results table for one target
-    (``usable_rows``, in their order).
+    (``table.usable_cases`` with the target finite, in their order).
 
     The per-case noise is the column ``{target}_sd`` when the table has it (rows where it is
     missing get the median of the others); otherwise None (the model estimates the noise).
     """
-    rows = usable_rows(table, target)
+    rows = usable_cases(table, [target])
     X = rows[list(NAMES)].to_numpy(float)
     y = rows[target].to_numpy(float)
     col = f"{target}_sd"

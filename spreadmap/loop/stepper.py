@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from ..case.identity import rounded
-from ..design import NAMES, Design
+from ..design import NAMES, TARGETS, Design
 from ..sampling import halton
 from ..schema import checked
 from ..study_rule.rule import DEFAULT_TOLERANCE, batches_until_converged
@@ -69,7 +69,12 @@ def _lds_per_batch(s: Mapping) -> int:
 
 def _study_rule(table: pd.DataFrame, targets: Sequence[str], s: Mapping, n: int,
                 tolerance: float, floors) -> dict[str, Any]:
-    """The study's rule on the LDS cases (``table``), checked after every batch's LDS share."""
+    """The study's rule on the LDS cases (``table``), checked after every batch's LDS share.
+
+    Its partitions are prefixes of the loop's own LDS rows in the order the loop ran them (the
+    rows the steps marked ``is_lds``), not ``table.partition`` of a sweep's ``index``: the loop's
+    LDS cases continue the sequence after the start, in its table's order. Usable: ``table.usable``.
+    """
     ok = usable(table)
     values = np.where(ok[:, None], table[list(targets)].to_numpy(float), np.nan)
     res = batches_until_converged(lambda m: values[:m], batch_size=max(_lds_per_batch(s), 1),
@@ -85,7 +90,7 @@ def _study_rule(table: pd.DataFrame, targets: Sequence[str], s: Mapping, n: int,
 
 def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | None = None,
          fit: FitFunction | None = None, ranges: Design | Mapping | None = None, maps_cfg: Mapping | None = None,
-         lds_seed: int = 42, targets: Sequence[str] = ("mfr", "pd"),
+         lds_seed: int = 42, targets: Sequence[str] = TARGETS,
          tolerance: float = DEFAULT_TOLERANCE, floors: Mapping | None = None,
          cost: Callable[[np.ndarray], np.ndarray] | None = None,
          models_out: dict | None = None) -> dict[str, Any]:

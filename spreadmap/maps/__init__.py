@@ -11,10 +11,10 @@ title and in its CSV (spreadmap.figures.save_figure).
 """
 from .grids import choose_machine_y
 from .machine import machine_grid, machine_map
-from .parallel import best_case, parallel_coordinates, usable_cases
+from .parallel import best_case, parallel_coordinates
 from .powder_maps import powder_band_map, powder_cluster_map
 from .regimes import REGIMES, regime_overlay
 from .style import MapResult
 
 __all__ = ["MapResult", "machine_map", "machine_grid", "powder_band_map", "powder_cluster_map", "parallel_coordinates",
-           "best_case", "usable_cases", "regime_overlay", "REGIMES", "choose_machine_y"]
+           "best_case", "regime_overlay", "REGIMES", "choose_machine_y"]

@@ -23,6 +23,8 @@ import pandas as pd
 from scipy import stats
 
 from ..design import NAMES, Design, h_over_d
+from ..table import flagged as table_flagged
+from ..table import usable_cases
 
 
 def ratio_quantile(m_a, s_a, m_b, s_b, q: float, lo: float = 1e-3, hi: float = 1e3, iterations: int = 80) -> np.ndarray:
@@ -182,10 +184,10 @@ def piles_by_band(cases: pd.DataFrame, min_heap_h2: float, edges=(1.0, 1.5, 2.0,
     for lo, hi in zip(edges[:-1], edges[1:]):
         part = cases[(hd >= lo) & (hd < hi)]
         ok = part[part["status"] == "ok"]
-        flagged = ok[ok["flagged"].astype(bool)]
+        flagged = ok[table_flagged(ok)]
         heap = ok["heap_end_h2"]
         ran_down = flagged["heap_end_h2"].isna() | (flagged["heap_end_h2"] < min_heap_h2)
-        usable = ok[~ok["flagged"].astype(bool)]
+        usable = usable_cases(part)
         rolled = ok["rolled_off_particles"]
         rows.append({"h_over_d_from": lo, "h_over_d_below": hi, "cases": len(part), "finished": len(ok),
                      "flagged": len(flagged), "flagged_ran_down": int(ran_down.sum()),

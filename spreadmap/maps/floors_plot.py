@@ -10,7 +10,8 @@ import pandas as pd  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 
 from ..figures import save_figure  # noqa: E402
-from .style import HATCH, SHORT  # noqa: E402
+from ..targets import short  # noqa: E402
+from .style import HATCH  # noqa: E402
 
 
 def plot_ratio_box(table: pd.DataFrame, targets, stem, names: tuple[str, str], hollow_d: float | None = None) -> dict:
@@ -62,8 +63,8 @@ def plot_ratio_box(table: pd.DataFrame, targets, stem, names: tuple[str, str], h
         ax.set_xticklabels(["1", "1.5", "2", "3", "5", "7"])
         ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("gap / particle diameter h/d [-] (nominal)")
-        ax.set_ylabel(f"{SHORT.get(t, t)} on {names[0]} / on {names[1]} [-]")
-        ax.set_title(f"{SHORT.get(t, t)}: {names[0]} over {names[1]}, {len(table)} points of the box\n"
+        ax.set_ylabel(f"{short(t)} on {names[0]} / on {names[1]} [-]")
+        ax.set_title(f"{short(t)}: {names[0]} over {names[1]}, {len(table)} points of the box\n"
                      "median and 95 % interval of the ratio of the two map means", fontsize=9)
         fig.colorbar(sc, ax=ax, label="friction f [-]")
     fig.tight_layout()
@@ -107,8 +108,8 @@ def plot_side_by_side(grid: pd.DataFrame, targets, stem, names: tuple[str, str],
         for ax, values, name in ((row[0], a, names[0]), (row[1], b, names[1])):
             cs = ax.contourf(d, h, values, levels=np.linspace(vmin, vmax, 13), cmap="viridis")
             ax.contour(d, h, values, levels=cs.levels[::2], colors="white", linewidths=0.5)
-            fig.colorbar(cs, ax=ax, label=f"{SHORT.get(t, t)} [-]", format="%.2f")
-            ax.set_title(f"{SHORT.get(t, t)} on {name}", fontsize=10)
+            fig.colorbar(cs, ax=ax, label=f"{short(t)} [-]", format="%.2f")
+            ax.set_title(f"{short(t)} on {name}", fontsize=10)
         ratio = field(f"{t}_ratio")
         unsure = ~grid.pivot_table(index="h_um", columns="d_um", values=f"{t}_ratio_defined").loc[h, d].to_numpy(bool)
         holds_one = (field(f"{t}_ratio_lo") <= 1.0) & (field(f"{t}_ratio_hi") >= 1.0)
@@ -116,9 +117,9 @@ def plot_side_by_side(grid: pd.DataFrame, targets, stem, names: tuple[str, str],
         lo = min(1.0, float(finite.min())) if finite.size else 1.0
         hi = max(float(np.percentile(finite, 98)) if finite.size else 2.0, lo + 0.05)
         cs = row[2].contourf(d, h, np.clip(ratio, None, hi), levels=np.linspace(lo, hi, 13), cmap="magma_r")
-        fig.colorbar(cs, ax=row[2], label=f"{SHORT.get(t, t)} ratio [-]", format="%.2f")
+        fig.colorbar(cs, ax=row[2], label=f"{short(t)} ratio [-]", format="%.2f")
         row[2].contourf(d, h, (unsure | holds_one).astype(float), levels=[0.5, 1.5], **HATCH)
-        row[2].set_title(f"{SHORT.get(t, t)}: {names[0]} / {names[1]}\nhatched: 1 inside the 95 % interval, or no ratio",
+        row[2].set_title(f"{short(t)}: {names[0]} / {names[1]}\nhatched: 1 inside the 95 % interval, or no ratio",
                          fontsize=9)
         for ax in row:
             ax.set_xlabel("particle diameter d [um]")

@@ -12,9 +12,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from .. import targets as registry
 from ..design import NAMES, Design
 from ..schema import checked
-from ..surrogate.settings import LAYER_TARGETS
 
 # config `maps:` at the schema's defaults (schemas/config.schema.yaml): the maps' keyword defaults, for
 # callers without a config (the workflow passes its config's values)
@@ -222,7 +222,7 @@ def choose_machine_y(cases: pd.DataFrame, targets) -> tuple[str, pd.DataFrame]:
         One row per scored candidate: ``target``, ``score``, ``how`` (which score), ``n`` (cases),
         ``r_with_mfr`` with ``r_low`` and ``r_high``.
     """
-    cands = [t for t in (*LAYER_TARGETS, "pd") if t in targets and t in cases]
+    cands = [t for t in (*registry.names("layer"), "pd") if t in targets and t in cases]
     rows = []
     for t in cands:
         ok = np.isfinite(cases[t].to_numpy(float)) & np.isfinite(cases["mfr"].to_numpy(float))
@@ -232,7 +232,7 @@ def choose_machine_y(cases: pd.DataFrame, targets) -> tuple[str, pd.DataFrame]:
         resid = y - np.polyval(np.polyfit(x, y, 1), x)
         pearson = stats.pearsonr(x, y)
         ci = pearson.confidence_interval(0.95) if len(y) > 3 else (np.nan, np.nan)
-        sd_col = f"{t}_sd"
+        sd_col = registry.REGISTRY[t].sd_column
         if sd_col in cases and np.isfinite(cases.loc[ok, sd_col].to_numpy(float)).all():
             score, how = resid.var(ddof=2) / np.mean(cases.loc[ok, sd_col].to_numpy(float) ** 2), "residual / noise variance"
         else:

@@ -18,9 +18,10 @@ from matplotlib.patches import Ellipse, Polygon
 
 from ..design import BY_NAME
 from ..figures import new_figure, save_figure
+from ..targets import axis_label, definition, short
 from . import grids
 from .labels import end_label, which_labelled
-from .style import DEFINITIONS, HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
+from .style import HATCH, MapResult, fmt, set_limits, support_note
 
 MACHINE = grids.MAP_DEFAULTS["machine"]
 
@@ -174,7 +175,7 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
     fx, fy = emptiest_corner(ax, X.ravel(), Y.ravel())
     cx, cy = x0 + fx * (x1 - x0) + nx, y0 + fy * (y1 - y0) + (ny if fy < 0.5 else -ny)
     ax.errorbar([cx], [cy], xerr=[nx], yerr=[ny], color="darkred", capsize=3, lw=1.2, zorder=6)
-    ax.annotate(f"± one DEM run's noise SD\n(MFR {nx:.3f}, {SHORT.get(y, y)} {ny:.3f})", (cx + nx, cy),
+    ax.annotate(f"± one DEM run's noise SD\n(MFR {nx:.3f}, {short(y)} {ny:.3f})", (cx + nx, cy),
                 xytext=(6, 0), textcoords="offset points", va="center", fontsize=7.5, color="darkred")
     placed = []
     for j in range(len(v)):
@@ -190,10 +191,10 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
                Line2D([], [], marker="o", ls="", mfc="white", mec="black", ms=5, label="setting beyond the data")]
     # "best" avoids the lines, the bands and the placed labels (matplotlib counts Text artists too)
     ax.legend(handles=handles, loc="best", fontsize=7.5, framealpha=0.9)
-    ax.set_xlabel(LABELS["mfr"])
-    ax.set_ylabel(LABELS.get(y, y))
-    if y in DEFINITIONS:
-        fig.text(0.02, -0.045, DEFINITIONS[y], fontsize=7, va="top", ha="left", color="0.25")
+    ax.set_xlabel(axis_label("mfr"))
+    ax.set_ylabel(axis_label(y))
+    if definition(y):
+        fig.text(0.02, -0.045, definition(y), fontsize=7, va="top", ha="left", color="0.25")
     if y_note:  # how far y is from MFR in disguise, across the sample
         ax.text(0.01, 0.01, y_note, transform=ax.transAxes, fontsize=7, va="bottom", ha="left", color="0.25")
     ax.grid(alpha=0.3)

@@ -13,31 +13,12 @@ import pandas as pd  # noqa: E402
 from matplotlib import colors as mcolors  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
+from .. import targets as registry  # noqa: E402
 from ..design import BY_NAME, NAMES, Design  # noqa: E402
 from ..figures import save_figure  # noqa: E402
-from ..table import usable  # noqa: E402
+from ..table import usable_cases  # noqa: E402
 from .style import MapResult  # noqa: E402
 from .style import fmt as _fmt
-
-
-def usable_cases(cases: pd.DataFrame) -> pd.DataFrame:
-    """Cases fit for statistics: usable (``spreadmap.table.usable``), with finite MFR and PD where present.
-
-    Parameters
-    ----------
-    cases : pandas.DataFrame
-        A results table.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The rows kept, with `cases`' index and columns.
-    """
-    keep = usable(cases)
-    for t in ("mfr", "pd"):
-        if t in cases:
-            keep &= np.isfinite(cases[t].to_numpy(float))
-    return cases.loc[keep]
 
 
 def best_case(
@@ -90,7 +71,7 @@ def parallel_coordinates(
 ) -> MapResult:
     """Parallel coordinates of a sample of DEM cases (the converged LDS sample).
 
-    Only usable cases (``usable_cases``) are drawn. Axes: the four parameters, each normalised to
+    Only usable cases with finite MFR and PD (``table.usable_cases``) are drawn. Axes: the four parameters, each normalised to
     its design range and ticked in physical units. Top panel coloured by normalised MFR, bottom by
     normalised PD (min-max over the drawn cases; the colour bars give the physical values too).
     The best case (``best_case``: ``mfr_min`` and ``score``) is drawn thick red and annotated.
@@ -124,7 +105,7 @@ def parallel_coordinates(
     ValueError
         If no case is usable, or none qualifies as the best (``best_case``).
     """
-    data = usable_cases(cases).copy()
+    data = usable_cases(cases, [t for t in registry.names("base") if t in cases]).copy()
     if data.empty:
         raise ValueError("no usable case to draw")
     best = best_case(data, mfr_min=mfr_min, score=score)
@@ -133,7 +114,7 @@ def parallel_coordinates(
     x = design.to_unit(data[list(NAMES)].to_numpy(float))
     for k, n in enumerate(NAMES):
         data[f"{n}_norm"] = x[:, k]
-    for t in ("mfr", "pd"):
+    for t in registry.names("base"):
         z = data[t].to_numpy(float)
         span = np.ptp(z)
         data[f"{t}_norm"] = (z - z.min()) / span if span > 0 else 0.5
@@ -143,7 +124,8 @@ def parallel_coordinates(
     xpos = np.arange(len(NAMES), dtype=float)
     fig, axes = plt.subplots(2, 1, figsize=(12, 8.5), sharex=True)
     cmap = plt.get_cmap("viridis")
-    for ax, t, name in ((axes[0], "mfr", "MFR"), (axes[1], "pd", "PD")):
+    for ax, t in zip(axes, registry.names("base")):
+        name = registry.short(t)
         c = data[f"{t}_norm"].to_numpy(float)
         order = np.argsort(c)  # high values drawn last, on top
         segs = [np.column_stack([xpos, row]) for row in x[order]]
@@ -186,7 +168,7 @@ def parallel_coordinates(
                  fontsize=11)
     fig.tight_layout()
     cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
-        "mfr", "pd"] + [f"{n}_norm" for n in NAMES] + ["mfr_norm", "pd_norm", "best"]
+        *registry.names("base")] + [f"{n}_norm" for n in NAMES] + [f"{t}_norm" for t in registry.names("base")] + ["best"]
     table = data[cols].reset_index(drop=True)
     paths = save_figure(fig, path_stem, table, floor)
     return MapResult(paths, table, {"best": best})

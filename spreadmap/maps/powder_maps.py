@@ -22,9 +22,10 @@ from matplotlib.lines import Line2D
 
 from ..design import BY_NAME
 from ..figures import new_figure, save_figure
+from ..targets import axis_label, short
 from . import grids
 from .labels import end_label, right_labels
-from .style import HATCH, LABELS, SHORT, MapResult, fmt, set_limits, support_note
+from .style import HATCH, MapResult, fmt, set_limits, support_note
 
 POWDER = grids.MAP_DEFAULTS["powder"]
 DEFAULT_SUPPORT = grids.MAP_DEFAULTS["support"]
@@ -133,23 +134,23 @@ def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor
             lo, hi = ax.get_ylim()
             ax.fill_between(d, lo, hi, where=beyond, step="mid", zorder=0, **HATCH)
             ax.set_ylim(lo, hi)
-        ax.set_ylabel(LABELS.get(t, t))
+        ax.set_ylabel(axis_label(t))
         ax.set_xlim(d.min(), d.max() + 0.2 * np.ptp(d))
         right_labels(ax, d[-1], z[:, -1], [f"f = {fmt(x)}" for x in fv], fcol)
-        ax.set_title(f"{SHORT.get(t, t)} against particle diameter; shaded: 95 % band of the mean "
+        ax.set_title(f"{short(t)} against particle diameter; shaded: 95 % band of the mean "
                      f"(f = {fmt(fv[0])}, {fmt(fv[-1])})", fontsize=9)
         ax.grid(alpha=0.3)
         ax2 = axes[1, col]
         ch = effect[f"{t}_change"].to_numpy()
         ax2.fill_between(d, effect[f"{t}_change_low"], effect[f"{t}_change_high"], color="0.6", alpha=0.35, lw=0,
                          label="95 % interval (joint draws)")
-        ax2.plot(d, ch, color="k", lw=1.5, label=f"{SHORT.get(t, t)}(f = {fmt(fv[-1])}) - {SHORT.get(t, t)}(f = {fmt(fv[0])})")
+        ax2.plot(d, ch, color="k", lw=1.5, label=f"{short(t)}(f = {fmt(fv[-1])}) - {short(t)}(f = {fmt(fv[0])})")
         ax2.axhline(0, color="darkred", lw=0.8)
         resolved = (effect[f"{t}_change_low"] > 0) | (effect[f"{t}_change_high"] < 0)
         ax2.set_title(f"effect of friction: resolved (interval excludes 0) at {int(resolved.sum())} of {len(d)} diameters",
                       fontsize=9)
         ax2.set_xlabel(BY_NAME["d_um"].label)
-        ax2.set_ylabel(f"change of {SHORT.get(t, t)} [-]")
+        ax2.set_ylabel(f"change of {short(t)} [-]")
         ax2.grid(alpha=0.3)
         ax2.legend(fontsize=7, loc="best")
     handles = [Line2D([], [], color="0.3", lw=2, label="supported by the data"),
@@ -254,8 +255,8 @@ def draw_powder_cluster_map(grid: pd.DataFrame, stem, y: str, support: dict, flo
                Line2D([], [], marker="+", ls="", color="0.4", ms=9, label="± one model SD"),
                Line2D([], [], marker="o", ls="", mfc="white", mec="0.3", ms=6, label="beyond the data")]
     ax.legend(handles=handles, loc="best", fontsize=7.5, framealpha=0.9)
-    ax.set_xlabel(LABELS["mfr"])
-    ax.set_ylabel(LABELS.get(y, y))
+    ax.set_xlabel(axis_label("mfr"))
+    ax.set_ylabel(axis_label(y))
     ax.set_title(f"Powder map (b): clusters of constant diameter as friction varies, at h = {fmt(h_um)} um, "
                  f"v = {fmt(v_mm_s)} mm/s", fontsize=10)
     ax.grid(alpha=0.3)

@@ -1,4 +1,5 @@
-"""What every map shares: axis labels, the support note, limits, and the result record."""
+"""What every map shares: the support note, limits, and the result record (the targets' labels:
+``spreadmap.targets``)."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -6,19 +7,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-LABELS = {"mfr": "mass flow rate MFR [-]", "pd": "packing density PD [-]",
-          "layer_packing": "layer fill: solid / volume under its surface [-]", "coverage": "floor coverage [-]",
-          "roughness_d": "surface roughness / d [-]", "thickness_ratio": "layer thickness / h [-]"}
-SHORT = {"mfr": "MFR", "pd": "PD", "layer_packing": "layer fill", "coverage": "coverage",
-         "roughness_d": "roughness/d", "thickness_ratio": "thickness/h"}
-# What a measure is, where its name alone can be misread (the column keeps its name, `layer_packing`):
-# drawn on any figure whose axis shows it. Numbers: tests/metrics/test_layer.py.
-DEFINITIONS = {
-    "layer_packing": ("layer fill = solid volume / volume between the floor (a rough floor's tops) and the layer's "
-                      "upper surface;\nnot a bulk packing fraction: a monolayer reads 0.80, spheres sunk in a rough "
-                      "floor's hollows up to 1,\nand it falls towards 0.74 (close packing) only as the layer grows many "
-                      "diameters thick"),
-}
 HATCH = dict(hatch="////", facecolor="none", edgecolor="0.55", lw=0.0)
 
 

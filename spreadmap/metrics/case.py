@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .. import targets
 from ..case.scene import DENSEST_PACKING
 from ..schema import checked, section_schema
 from .flow import heap_h2, layer_density, mass_flow_ratio, measured_span, powder, sphere_volume, window_passed_volume
@@ -24,6 +25,8 @@ NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_pa
                "thickness_ratio_sd",
                # the heap ahead of the blade at the window's start and end, in h^2 (issue 32)
                "heap_start_h2", "heap_end_h2")
+# NEW_COLUMNS and SIZE_COLUMNS keep the published tables' order; a target registered later in
+# spreadmap.targets brings its columns after them (target_columns)
 # the sizes: the feed's volume quantiles, the gap over D90 and the layer's segregation (issue 51, .sizes)
 SIZE_COLUMNS = ("feed_d10_um", "feed_d50_um", "feed_d90_um", "h_over_d90", "layer_d50_ratio", "layer_d50_ratio_sd")
 # metrics.layer_block_d's default (the schema's): block length (in d) of the layer measures' jackknife noise (.layer)
@@ -46,6 +49,14 @@ MAX_FLOW_DECLINE_Z = section_schema("stability")["properties"]["max_flow_decline
 def _powder_snapshot(snapshot: dict) -> dict:
     pos, rad = powder(snapshot)
     return {**snapshot, "positions": pos, "radii": rad}
+
+
+def target_columns(first=()) -> tuple[str, ...]:
+    """The columns of the targets registered in ``spreadmap.targets`` that neither `first` (the
+    row's leading columns, e.g. mfr and pd) nor NEW_COLUMNS and SIZE_COLUMNS hold: a case's row
+    ends with them (none for the targets of the published tables)."""
+    held = set(first) | set(NEW_COLUMNS) | set(SIZE_COLUMNS)
+    return tuple(c for c in targets.columns() if c not in held)
 
 
 def check_settings(settings: dict) -> None:
@@ -201,13 +212,14 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         "relaxed_by_time": raw.get("relaxed_by_time"),
         "yade_version": raw.get("yade_version", ""),
     }
-    new = {k: math.nan for k in NEW_COLUMNS + SIZE_COLUMNS}
+    own = NEW_COLUMNS + SIZE_COLUMNS + target_columns(out)
+    new = {k: math.nan for k in own}
     new.update(overlap_by_cause(raw, out["peak_overlap_ratio"], stability["max_overlap_ratio"]))
     flags = []
     if raw["status"] == "ok":
         measured = measure(raw, settings)
         out.update({k: measured[k] for k in ("mfr", "pd", "pd_cv")})
-        new.update({k: measured[k] for k in NEW_COLUMNS + SIZE_COLUMNS if k in measured})
+        new.update({k: measured[k] for k in own if k in measured})
         out["regime"] = classify(out["mfr"], new["coverage"], new["thickness_ratio"], regime_rules)
         for name in ("mfr", "pd"):
             if not 0.0 <= out[name] <= DENSEST_PACKING:

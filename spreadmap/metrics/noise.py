@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .. import targets
+
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -71,8 +73,8 @@ def flow_trend(series, x0: float, x1: float, gap: float, width: float) -> float:
     return float((second - first) / (0.5 * (first + second)))
 
 
-# The stated noise SDs of a results table (counting law for MFR and PD, block jackknife for the layer)
-NOISE_SD_COLUMNS = ("mfr_sd", "pd_sd", "layer_packing_sd", "coverage_sd", "roughness_d_sd", "thickness_ratio_sd")
+# The stated noise SDs of a results table (counting law for MFR and PD, block jackknife for the layer):
+# spreadmap.targets.sd_columns(), one per registered target
 
 
 def calibration_factors(table: pd.DataFrame, calibration: list[dict] | None, target: str | None = None) -> np.ndarray:
@@ -115,14 +117,15 @@ def calibration_factors(table: pd.DataFrame, calibration: list[dict] | None, tar
 
 
 def calibrated_noise(table: pd.DataFrame, calibration: list[dict] | None) -> pd.DataFrame:
-    """A copy of a results table whose stated noise SDs (NOISE_SD_COLUMNS) are scaled by region
+    """A copy of a results table whose stated noise SDs (``targets.sd_columns()``) are scaled by region
     where packing-seed repeats measured them off (config `noise_calibration`: at thin gaps the
     flow comes in bursts the counting law does not see). The measured values are left as they
     are; every analysis that weighs cases by their noise (the loop's criteria and model, the
     surrogate, the maps) reads the calibrated SDs."""
     import pandas as pd
     out = table.copy()
-    for col in NOISE_SD_COLUMNS:
-        if col in out.columns:
-            out[col] = pd.to_numeric(out[col], errors="coerce") * calibration_factors(out, calibration, col.removesuffix("_sd"))
+    for t in targets.REGISTRY.values():
+        if t.sd_column in out.columns:
+            out[t.sd_column] = (pd.to_numeric(out[t.sd_column], errors="coerce")
+                                * calibration_factors(out, calibration, t.name))
     return out

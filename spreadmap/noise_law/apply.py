@@ -20,7 +20,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..metrics.noise import NOISE_SD_COLUMNS, calibrated_noise
+from .. import targets as registry
+from ..metrics.noise import calibrated_noise
 from ..schema import checked, section_schema
 from .cells import COUNT
 
@@ -52,7 +53,7 @@ def check_sections(noise_model: dict | None, noise_calibration: list | None) -> 
         return
     covered = [t for t in MODEL_TARGETS if t in noise_model]
     for i, region in enumerate(noise_calibration or []):
-        named = region.get("targets") or [c.removesuffix("_sd") for c in NOISE_SD_COLUMNS]
+        named = region.get("targets") or list(registry.names())
         clash = sorted(set(named) & set(covered))
         if clash:
             raise ValueError(f"noise_calibration[{i}] scales {clash}, whose noise SDs noise_model sets "
@@ -96,7 +97,7 @@ def case_noise(table: pd.DataFrame, noise_model: dict | None, noise_calibration:
     Parameters
     ----------
     table : pandas.DataFrame
-        A results table: the targets, their stated SDs (``NOISE_SD_COLUMNS``), ``h_um``, ``d_um``
+        A results table: the targets, their stated SDs (``targets.sd_columns()``), ``h_um``, ``d_um``
         and, for a target the law sets, the count behind its noise (``n_passed`` for MFR,
         ``n_pd`` for PD).
     noise_model : dict or None

@@ -18,11 +18,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .. import targets
 from ..table import usable_cases as usable
 
 POINT = ("f", "d_um", "h_um", "v_mm_s")
 # the count behind each target's counting law (spreadmap.metrics.case)
-COUNT = {"mfr": "n_passed", "pd": "n_pd"}
+COUNT = {t.name: t.count_column for t in targets.REGISTRY.values() if t.count_column}  # mfr, pd
 
 
 def point_key(frame: pd.DataFrame) -> pd.Series:

@@ -7,6 +7,7 @@ import pandas as pd
 from scipy import stats
 
 from ..figures import new_figure, save_figure
+from .cells import COUNT
 from .fit import HD_REF, N_REF, NoiseLaw
 
 GROUPS = {"study": ("study_", "o", "tab:blue"), "fidelity presets": ("fidelity_presets", "s", "tab:orange"),
@@ -59,7 +60,7 @@ def law_figure(cells: dict[str, pd.DataFrame], laws: dict[str, NoiseLaw], stated
     fig = new_figure(10.5, 8.0)
     axes = fig.subplots(2, 2)
     rows = []
-    for row, target in enumerate(("mfr", "pd")):
+    for row, target in enumerate(COUNT):  # mfr, pd: the targets the law covers
         c, law = cells[target], laws[target]
         b, g = law.coefficient("b_ln_n"), law.coefficient("g_ln_hd")
         rel = np.sqrt(c["s2"]) / c["mean"]

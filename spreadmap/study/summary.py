@@ -21,12 +21,12 @@ import pandas as pd
 from scipy.stats import qmc
 
 from spreadmap.case.substrate import floor_label
+from spreadmap.config import renamed_sections
 from spreadmap.design import NAMES, bounds
 from spreadmap.design import h_over_d as gap_ratio
 from spreadmap.loop.stepper import step_number
-from spreadmap.surrogate.training_rows import partition
 from spreadmap.surrogate.validation import by_band
-from spreadmap.table import flagged, usable
+from spreadmap.table import flagged, partition, usable
 
 NOT_YET = "not yet run"
 
@@ -116,8 +116,8 @@ def _study_rule(study: Path) -> list[str]:
     before."""
     from spreadmap.study_rule.rule import DEFAULT_TOLERANCE, convergence_table, first_converged
 
-    cfg = _read_yaml(study / "config.yaml")
-    conv = cfg.get("convergence") or {}
+    cfg = renamed_sections(_read_yaml(study / "config.yaml"))  # a published config may say `convergence:`
+    conv = cfg.get("study_rule") or {}
     # a published config (not validated: it may predate the schema) without a tolerance ran the schema's
     tol, floors = conv.get("tolerance", DEFAULT_TOLERANCE), conv.get("floors")
     lines = []

@@ -28,7 +28,7 @@ converges.  The rule used here is
 
     change = |curr - prev| / max(|prev|, floor[statistic])
 
-with the floors of ``DEFAULT_FLOORS`` (the schema's ``convergence.floors``):
+with the floors of ``DEFAULT_FLOORS`` (the schema's ``study_rule.floors``):
 
 * ``skewness`` and ``kurtosis``: floor **1.0**.  Both are dimensionless standardised moments whose
   natural unit is 1 (a distribution with |skewness| or |excess kurtosis| below 1 is "moderately"
@@ -71,16 +71,18 @@ import numpy as np
 import pandas as pd
 from scipy import stats as _st
 
+from .. import targets as registry
 from ..schema import checked
+from ..table import partition
 from ..table import usable as usable_rows
 
 STATISTICS: tuple[str, ...] = ("mean", "std", "median", "kurtosis", "skewness")
 TINY = 1e-12  # a scale below which a spread is taken for none
-# the schema's convergence.floors and convergence.tolerance, for callers without a config
-DEFAULT_FLOORS: dict[str, float] = checked("convergence")["floors"]
-DEFAULT_TOLERANCE = checked("convergence")["tolerance"]
+# the schema's study_rule.floors and study_rule.tolerance, for callers without a config
+DEFAULT_FLOORS: dict[str, float] = checked("study_rule")["floors"]
+DEFAULT_TOLERANCE = checked("study_rule")["tolerance"]
 NOT_CONVERGED = "not converged within the cases run"
-DEFAULT_TARGETS: tuple[str, ...] = ("mfr", "pd")
+DEFAULT_TARGETS: tuple[str, ...] = registry.names("base")  # mfr, pd (spreadmap.targets)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -169,7 +171,8 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
                       partition_col: str | None = None) -> pd.DataFrame:
     """Statistics, changes and the criterion for each partition of one sweep.
 
-    Prefix mode (default, LDS): partition N = the first N rows in ``order_col`` order;
+    Prefix mode (default, LDS): partition N = the cases at positions 0 .. N-1 of the sequence
+    (``table.partition``: ``order_col`` below N), which must all be rows of the table;
     ``partitions`` defaults to multiples of 100 up to the number of rows (plus the total).
     Group mode (``partition_col`` set, lattices): each value of ``partition_col`` is one
     partition, N = its number of rows, partitions are ordered by N.
@@ -204,8 +207,8 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
     Raises
     ------
     ValueError
-        If the table holds several sweeps, two groups have the same size, or a partition lies
-        outside 1..len(table).
+        If the table holds several sweeps, two groups have the same size, a partition lies
+        outside 1..len(table), or a prefix partition does not hold its N positions once each.
     """
     if "sweep" in table.columns and table["sweep"].nunique() > 1:
         raise ValueError("table holds several sweeps; filter it to one sweep first")
@@ -230,7 +233,11 @@ def convergence_table(table: pd.DataFrame, target_cols: Sequence[str] = DEFAULT_
         parts = sorted({int(p) for p in partitions})
         if parts and (parts[0] < 1 or parts[-1] > n_total):
             raise ValueError(f"partitions must lie in 1..{n_total}, got {parts}")
-        groups = [(n, None, work.iloc[:n]) for n in parts]
+        groups = [(n, None, partition(work, n, sweep=None, order_col=order_col)) for n in parts]
+        short = [(n, len(g)) for n, _, g in groups if len(g) != n]
+        if short:
+            raise ValueError(f"partitions (N, rows with {order_col} < N) {short}: the sequence's positions are "
+                             f"not 0 .. N-1 each once; a missing case must still have its row (status failed)")
 
     rows = []
     prev = None

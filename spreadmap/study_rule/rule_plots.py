@@ -15,11 +15,11 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import NullFormatter
 
+from .. import targets as registry
 from ..figures import N_LABEL, new_figure, save_figure
-from ..table import usable
+from ..table import partition, usable_cases
 from . import rule as cv
 
-TARGET_LABELS = {"mfr": "MFR [-]", "pd": "PD [-]"}
 STAT_LABELS = {
     "mean": "mean [-]",
     "std": "standard deviation (ddof=1) [-]",
@@ -30,7 +30,7 @@ STAT_LABELS = {
 
 
 def _label(target: str) -> str:
-    return TARGET_LABELS.get(target, f"{target} [-]")
+    return f"{registry.short(target)} [{registry.REGISTRY[target].unit}]" if target in registry.REGISTRY else f"{target} [-]"
 
 
 # ----------------------------------------------------------------------------------------------
@@ -70,15 +70,13 @@ def partition_values(table: pd.DataFrame, sweep: str, targets: Sequence[str] = c
     parts: list[tuple[int, pd.DataFrame]] = []
     if partition_col is not None:
         for _, g in table.groupby(partition_col, sort=False):
-            parts.append((len(g), g.loc[usable(g)]))
+            parts.append((len(g), usable_cases(g)))
         parts.sort(key=lambda p: p[0])
     else:
-        ordered = table.sort_values(order_col, kind="stable")
-        keep = usable(ordered)
         if partitions is None:
             partitions = sorted({int(n) for n in np.unique(np.geomspace(
-                min(16, len(ordered)), len(ordered), 5).astype(int))})
-        parts = [(int(n), ordered.iloc[:int(n)][keep[:int(n)]]) for n in partitions]
+                min(16, len(table)), len(table), 5).astype(int))})
+        parts = [(int(n), usable_cases(partition(table, n, sweep=None, order_col=order_col))) for n in partitions]
     frames = []
     for n, g in parts:
         for t in targets:

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..design import TARGETS
+
 
 @dataclass(frozen=True)
 class Correction:
@@ -142,7 +144,7 @@ class Correction:
         k, s = self.factors[target]
         return draws * rng.normal(k, s, size=(len(draws), 1))
 
-    def label(self, targets=("mfr", "pd")) -> str:
+    def label(self, targets=TARGETS) -> str:
         """One line for a map: what the means are, e.g. "`default` corrected to `reference`: MFR x1.031 (SD 0.010)".
 
         Parameters

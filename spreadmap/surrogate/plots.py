@@ -20,11 +20,10 @@ import pandas as pd
 from scipy.stats import norm
 
 from ..figures import new_figure, save_figure
+from ..targets import phrase
 from . import validation
 
 COLOURS = {"gp": "tab:blue", "mlp": "tab:orange"}
-LONG = {"mfr": "MFR", "pd": "PD", "layer_packing": "layer fill", "coverage": "coverage",
-        "roughness_d": "roughness / d", "thickness_ratio": "layer thickness / h"}
 
 
 def _numbers(v: pd.Series) -> str:
@@ -59,9 +58,9 @@ def plot_parity(val: pd.DataFrame, parity: pd.DataFrame, stem, floor: str | None
         ax.set_xlim(x)
         ax.set_ylim(x)
         ax.set_aspect("equal")
-        ax.set_xlabel(f"DEM {LONG.get(t, t)} [-]")
-        ax.set_ylabel(f"surrogate {LONG.get(t, t)} [-] (case left out)")
-        ax.set_title(f"{LONG.get(t, t)}: {int(chosen['n_cases'])} cases, {int(chosen['repeats'])}x k-fold", fontsize=10)
+        ax.set_xlabel(f"DEM {phrase(t)} [-]")
+        ax.set_ylabel(f"surrogate {phrase(t)} [-] (case left out)")
+        ax.set_title(f"{phrase(t)}: {int(chosen['n_cases'])} cases, {int(chosen['repeats'])}x k-fold", fontsize=10)
         text = "\n".join(_numbers(r) + ("  (maps)" if r["map_model"] else "") for _, r in v.iterrows())
         ax.text(0.02, 0.98, text, transform=ax.transAxes, va="top", fontsize=6.8,
                 bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
@@ -94,7 +93,7 @@ def plot_study(summary: pd.DataFrame, val: pd.DataFrame, stem, floor: str | None
         ax.set_ylabel("R$^2$")
         lo = min(float(s["r2_min"].min()), float(val["r2"].min()))
         ax.set_ylim(max(lo - 0.05, -0.5), 1.02)
-        ax.set_title(LONG.get(t, t), fontsize=10)
+        ax.set_title(phrase(t), fontsize=10)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=6.5, loc="lower left")
     return save_figure(fig, stem, summary, floor)
@@ -110,8 +109,8 @@ def plot_learning_curve(learning: pd.DataFrame, stem, floor: str | None = None) 
         c = f"C{i}"
         yerr = np.vstack([lc["rmse"] - lc["rmse_low"], lc["rmse_high"] - lc["rmse"]])
         ax.errorbar(lc["n_cases"], lc["rmse"], yerr=yerr, fmt="o-", capsize=4, color=c,
-                    label=f"{LONG.get(t, t)} ({lc['model'].iloc[0].upper()}): cross-validated RMSE, 95 % interval")
-        ax.plot(lc["n_cases"], lc["noise_sd"], ls=":", color=c, label=f"{LONG.get(t, t)}: noise SD of one run")
+                    label=f"{phrase(t)} ({lc['model'].iloc[0].upper()}): cross-validated RMSE, 95 % interval")
+        ax.plot(lc["n_cases"], lc["noise_sd"], ls=":", color=c, label=f"{phrase(t)}: noise SD of one run")
     ax.set_xlabel("LDS cases used (prefix of the sequence)")
     ax.set_ylabel("RMSE against the DEM values [-]")
     ax.set_title("learning curve: cross-validated error against the noise of one run", fontsize=10)
@@ -211,9 +210,9 @@ def plot_heldout(scores: dict[str, pd.DataFrame], stem, level: float = 0.95) -> 
         ax.set_xlim(x)
         ax.set_ylim(x)
         ax.set_aspect("equal")
-        ax.set_xlabel(f"predicted {LONG.get(t, t)} (before the runs) [-]")
-        ax.set_ylabel(f"DEM {LONG.get(t, t)}, mean over seeds [-]")
-        ax.set_title(LONG.get(t, t), fontsize=10)
+        ax.set_xlabel(f"predicted {phrase(t)} (before the runs) [-]")
+        ax.set_ylabel(f"DEM {phrase(t)}, mean over seeds [-]")
+        ax.set_title(phrase(t), fontsize=10)
         ax.legend(loc="upper left", fontsize=7)
         ax.grid(alpha=0.3)
     _heldout_z(axes[len(targets)], table, targets, z, markers)
@@ -245,7 +244,7 @@ def _heldout_z(ax, table: pd.DataFrame, targets: list, z_level: float, markers: 
     ax.set_ylim(-top, top)
     ax.axhline(1.0, color="0.5", lw=0.8, ls=":")
     ax.axhline(-1.0, color="0.5", lw=0.8, ls=":")
-    ax.set_xticks(range(len(targets)), [LONG.get(t, t) for t in targets], rotation=35, ha="right", fontsize=8)
+    ax.set_xticks(range(len(targets)), [phrase(t) for t in targets], rotation=35, ha="right", fontsize=8)
     ax.set_ylabel("z = (seed mean - prediction) / its SD [-]")
     ax.set_title(f"z of every point; grey: |z| <= {z_level:.2f}; bars: RMS z (1 if the intervals are right)",
                  fontsize=8)

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..design import NAMES
+from ..design import NAMES, TARGETS
 from ..files import atomic_path
 from ..records import CorruptFileError
 
@@ -91,9 +91,9 @@ class SurrogateModel:
     def __call__(self, points) -> np.ndarray:
         """The package's predictor convention: (n, 4) physical -> (n, 2) mean MFR and PD."""
         X = np.asarray(points, float)
-        means = [self.models[t].latent(X)[0] for t in ("mfr", "pd")]
+        means = [self.models[t].latent(X)[0] for t in TARGETS]
         if self.correction is not None:
-            means = [self.correction.scale(t, m) for t, m in zip(("mfr", "pd"), means)]
+            means = [self.correction.scale(t, m) for t, m in zip(TARGETS, means)]
         return np.column_stack(means)
 
 

@@ -5,10 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from .. import targets as registry
 from ..schema import checked
-
-LAYER_TARGETS = ("layer_packing", "coverage", "roughness_d", "thickness_ratio")
-BASE_TARGETS = ("mfr", "pd")
 
 
 def make_config(config: Mapping | None = None) -> dict:
@@ -39,10 +37,11 @@ def map_config(config: Mapping | None = None) -> dict:
 
 
 def resolve_targets(spec, columns) -> list[str]:
-    """The targets to model: ``auto`` = mfr, pd and the layer-quality columns present."""
+    """The targets to model: ``auto`` = every target of ``spreadmap.targets`` whose column the
+    table has (mfr, pd and the layer-quality measures), in registry order; or the list given."""
     columns = set(columns)
     if spec == "auto":
-        return [t for t in (*BASE_TARGETS, *LAYER_TARGETS) if t in columns]
+        return [t for t in registry.names() if t in columns]
     missing = [t for t in spec if t not in columns]
     if missing:
         raise ValueError(f"surrogate.targets: column(s) {missing} not in the results table")

@@ -1,8 +1,8 @@
 """Which rows of a results table the surrogate learns from, and what it knows of their noise.
 
-One definition of a usable case (``table.usable``: finished and not flagged; here also finite
-inputs and targets) and one of a partition (the LDS prefix ``index < n``). Every excluded row is
-counted by reason; nothing is dropped silently.
+The rows are the usable cases of ``table.usable`` (finished, not flagged, finite inputs and
+targets); a partition is ``table.partition``. Every excluded row is counted by reason; nothing
+is dropped silently.
 """
 from __future__ import annotations
 
@@ -62,7 +62,7 @@ def select(df: pd.DataFrame, targets) -> TrainingRows:
     values = df[[*NAMES, *targets]].apply(pd.to_numeric, errors="coerce").to_numpy(float)
     finite = np.isfinite(values).all(axis=1)
     ok_status = (df["status"].astype(str).str.strip() == "ok").to_numpy()
-    keep = usable(df) & finite
+    keep = usable(df, (*NAMES, *targets))
     exclusions = {}
     for status, n in df.loc[~ok_status, "status"].astype(str).value_counts().items():
         exclusions[status] = int(n)
@@ -73,11 +73,3 @@ def select(df: pd.DataFrame, targets) -> TrainingRows:
     for c in (*NAMES, *targets):
         frame[c] = pd.to_numeric(frame[c]).astype(float)
     return TrainingRows(frame.reset_index(drop=True), list(targets), exclusions)
-
-
-def partition(df: pd.DataFrame, n: int, sweep: str | None = "lds") -> pd.DataFrame:
-    """The partition LDS-n: the rows of ``sweep`` whose ``index`` is below n (prefix order)."""
-    rows = df
-    if sweep is not None and "sweep" in df.columns:
-        rows = rows[rows["sweep"].astype(str) == sweep]
-    return rows[rows["index"].astype(int) < int(n)].sort_values("index").reset_index(drop=True)

@@ -1,5 +1,6 @@
 """Bad configuration is refused with the key, the value and what is allowed; nothing is written."""
 import copy
+import warnings
 
 import pytest
 import yaml
@@ -90,3 +91,32 @@ def test_a_negative_packing_seed_is_refused(raw_config, change, key):
     change(raw_config)
     with pytest.raises(ConfigError, match=key + r"': value -\d is not allowed; it must be >= 0"):
         validate(copy.deepcopy(raw_config))
+
+
+def test_the_study_rules_old_section_name_is_read_with_a_warning_naming_both(raw_config):
+    """`convergence:` (before the rename) is read as `study_rule:`, with a warning naming the old
+    and the new key; given under both names the config is refused."""
+    cfg = copy.deepcopy(raw_config)
+    cfg["convergence"] = dict(cfg.pop("study_rule"), tolerance=0.0125)
+    with pytest.warns(FutureWarning, match=r"'convergence:' is deprecated, read as 'study_rule:'.*`converge:`"):
+        out = validate(cfg)
+    assert "convergence" not in out and out["study_rule"]["tolerance"] == 0.0125
+    both = copy.deepcopy(raw_config)
+    both["convergence"] = {"tolerance": 0.01}
+    with pytest.raises(ConfigError, match=r"both 'convergence:' and 'study_rule:'.*keep 'study_rule:' only"):
+        validate(both)
+
+
+@pytest.mark.parametrize("path", sorted(p.relative_to(ROOT) for p in (ROOT / "docs").rglob("config.yaml")))
+def test_every_published_config_still_loads(path):
+    """The configs published under docs/ (written before the rename, with `convergence:`) load,
+    their study rule's section under its new name, unchanged."""
+    raw = yaml.safe_load((ROOT / path).read_text())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FutureWarning)
+        cfg = validate(copy.deepcopy(raw))
+    old = raw.get("convergence", raw.get("study_rule"))
+    assert old is not None
+    for key, value in old.items():  # the schema may fill defaults inside (e.g. the floors of mean, std)
+        got = cfg["study_rule"][key]
+        assert ({k: got[k] for k in value} if isinstance(value, dict) else got) == value, key

@@ -16,10 +16,10 @@ from spreadmap.config import validate
 
 SCHEMA = ROOT / "schemas" / "config.schema.yaml"
 # the sections the rules read plainly (rules/*.smk), dropped from the shipped config below
-SECTIONS = ("convergence", "converge", "maps", "surrogate", "decisions", "pictures", "metrics")
+SECTIONS = ("study_rule", "converge", "maps", "surrogate", "decisions", "pictures", "metrics")
 # the keys the rules and scripts read from those sections
-KEYS = [("convergence", "tolerance"), ("convergence", "window"), ("convergence", "sampling_study", "seeds"),
-        ("convergence", "sampling_study", "k_max"), ("converge", "start"), ("converge", "batch"),
+KEYS = [("study_rule", "tolerance"), ("study_rule", "window"), ("study_rule", "sampling_study", "seeds"),
+        ("study_rule", "sampling_study", "k_max"), ("converge", "start"), ("converge", "batch"),
         ("converge", "budget"), ("metrics", "counting_noise_c"), ("maps", "powder", "h_um"),
         ("maps", "powder", "v_mm_s"), ("maps", "support", "max_distance"), ("surrogate", "model"),
         ("decisions", "confidence"), ("pictures", "colour_by"), ("pictures", "cases"), ("pictures", "vtk")]
@@ -78,14 +78,14 @@ def test_the_rules_pass_the_schemas_defaults(tmp_path, schema):
     params = json.loads((wf / "params.json").read_text())
     default = lambda *keys: schema_default(schema, keys)  # noqa: E731
     step = params["converge_step"]
-    assert step["tolerance"] == default("convergence", "tolerance")
+    assert step["tolerance"] == default("study_rule", "tolerance")
     assert step["counting_c"] == default("metrics", "counting_noise_c")
     assert step["converge"]["start"] == default("converge", "start")
     assert step["maps"]["powder"] == {"h_um": default("maps", "powder", "h_um"), "v_mm_s": default("maps", "powder", "v_mm_s")}
     assert step["surrogate"]["model"] == default("surrogate", "model")
-    assert params["convergence"]["window"] == default("convergence", "window")
-    assert params["sampling_study"]["study"] == {"seeds": default("convergence", "sampling_study", "seeds"),
-                                                 "k_max": default("convergence", "sampling_study", "k_max")}
+    assert params["convergence"]["window"] == default("study_rule", "window")
+    assert params["sampling_study"]["study"] == {"seeds": default("study_rule", "sampling_study", "seeds"),
+                                                 "k_max": default("study_rule", "sampling_study", "k_max")}
     assert params["maps"]["counting_c"] == default("metrics", "counting_noise_c")
     assert params["decide"]["support"]["max_distance"] == default("maps", "support", "max_distance")
     assert params["decide"]["decisions"]["confidence"] == default("decisions", "confidence")
@@ -93,14 +93,14 @@ def test_the_rules_pass_the_schemas_defaults(tmp_path, schema):
 
 
 # the package's defaults for callers without a config, each at a schema path given another value here
-CHANGED = {("convergence", "tolerance"): 0.0125, ("maps", "powder", "h_um"): 61.5, ("maps", "powder", "v_mm_s"): 7.25,
+CHANGED = {("study_rule", "tolerance"): 0.0125, ("maps", "powder", "h_um"): 61.5, ("maps", "powder", "v_mm_s"): 7.25,
            ("maps", "machine", "f"): 0.35, ("maps", "machine", "n_h"): 4, ("maps", "regime_plane", "v_mm_s"): 12.5,
            ("maps", "support", "max_distance"): 2.5, ("metrics", "counting_noise_c"): 0.41,
            ("metrics", "layer_block_d"): 3.5, ("noise_model", "n_ref"): 175, ("stability", "min_heap_h2"): 0.65,
            ("stability", "max_wedge_overlap_ratio"): 0.3, ("stability", "max_flow_decline_z"): 2.5,
            ("converge", "cost_law", "ln_a"): -17.5, ("converge", "budget"): 300, ("converge", "acquisition"): "ivr",
            ("converge", "map_error", "tolerance", "pd"): 0.03, ("converge", "ci", "halfwidth", "kurtosis"): 0.45,
-           ("converge", "map_change", "box_k"): 4, ("convergence", "floors", "skewness"): 0.75,
+           ("converge", "map_change", "box_k"): 4, ("study_rule", "floors", "skewness"): 0.75,
            ("scene", "substrate", "jitter"): 0.25}
 READ = """
 import inspect, json, sys
@@ -182,7 +182,7 @@ def test_each_settings_reader_given_nothing_returns_the_schemas_defaults(schema)
     assert {k: v for k, v in step.items() if k != "criteria"} == converge
     criteria = {k: converge[k] for k in ("stop_on", "hold_for", *map_criteria.CRITERIA)}
     assert step["criteria"] == map_criteria.settings({}) == criteria
-    assert DEFAULT_FLOORS == schema_defaults(props["convergence"])["floors"]
+    assert DEFAULT_FLOORS == schema_defaults(props["study_rule"])["floors"]
     substrate = schema_defaults(props["scene"]["properties"]["substrate"])
     assert floor_of(None) == (substrate["kind"], substrate["jitter"])
 

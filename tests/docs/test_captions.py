@@ -45,7 +45,7 @@ def test_captions_follow_the_config(config):
     cfg = copy.deepcopy(config)
     cfg["sweeps"]["lds"]["preset"] = "fast"  # a sweep at its own preset
     cfg["regime"].update(short_feed_coverage_min=0.123, short_feed_thickness_min=0.456)
-    cfg["convergence"]["tolerance"] = 0.02
+    cfg["study_rule"]["tolerance"] = 0.02
     for name in ("statistics", "distributions"):
         text = render(ROOT / "rules" / "captions" / f"{name}.rst", cfg)
         assert f"lds fast, lattice {cfg['preset']}" in text, text

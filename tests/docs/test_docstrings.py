@@ -128,7 +128,6 @@ PUBLIC_API = [
     ("spreadmap.maps.machine", "machine_map"),
     ("spreadmap.maps.parallel", "best_case"),
     ("spreadmap.maps.parallel", "parallel_coordinates"),
-    ("spreadmap.maps.parallel", "usable_cases"),
     ("spreadmap.maps.powder_maps", "powder_band_map"),
     ("spreadmap.maps.powder_maps", "powder_cluster_map"),
     ("spreadmap.maps.regimes", "regime_overlay"),
@@ -208,6 +207,7 @@ PUBLIC_API = [
     ("spreadmap.table", "build_table"),
     ("spreadmap.table", "usable"),
     ("spreadmap.table", "usable_cases"),
+    ("spreadmap.table", "partition"),
     ("spreadmap.table", "write_table"),
 ]
 

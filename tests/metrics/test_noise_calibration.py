@@ -8,7 +8,8 @@ import yaml
 from conftest import ROOT
 from scipy import stats
 
-from spreadmap.metrics.noise import NOISE_SD_COLUMNS, calibrated_noise, calibration_factors
+from spreadmap import targets
+from spreadmap.metrics.noise import calibrated_noise, calibration_factors
 
 STUDY = ROOT / "docs" / "study"
 
@@ -41,9 +42,7 @@ def test_a_region_has_bounds_either_side_and_may_name_its_targets():
     np.testing.assert_allclose(out["pd_sd"], [0.04, 0.01, 0.01, 0.06])
     np.testing.assert_allclose(out["coverage_sd"], [0.2, 0.3, 0.3, 0.3])  # not named by the band [3, 4): the next one
     np.testing.assert_allclose(calibration_factors(table, calibration), [2.0, 0.5, 0.5, 3.0])  # no target: every region
-    schema = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())
-    named = schema["properties"]["noise_calibration"]["items"]["properties"]["targets"]["items"]["enum"]
-    assert sorted(named) == sorted(col.removesuffix("_sd") for col in NOISE_SD_COLUMNS)
+    # the schema's list of targets a region may name: tests/core/test_targets.py
 
 
 def seed_repeats(name: str) -> pd.DataFrame:
@@ -57,7 +56,7 @@ def seed_repeats(name: str) -> pd.DataFrame:
     cases = pd.concat([repeats, firsts])
     assert (cases["status"] == "ok").all() and not cases["flagged"].any()
     assert cases.groupby("point").size().eq(4).all() and cases["point"].nunique() == 8
-    assert set(NOISE_SD_COLUMNS) <= set(cases.columns)
+    assert set(targets.sd_columns()) <= set(cases.columns)
     return cases
 
 

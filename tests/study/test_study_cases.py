@@ -232,7 +232,7 @@ def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(publ
                         "kurtosis": stats.kurtosis(x, fisher=True, bias=True), "skewness": stats.skew(x, bias=True)}
             for name, value in expected.items():
                 assert row[f"{target}_{name}"] == pytest.approx(value, rel=1e-9, abs=1e-12), (row["sweep"], target, name)
-    tol = cfg["convergence"]["tolerance"]
+    tol = cfg["study_rule"]["tolerance"]
     for sweep in ("lds", "lattice"):
         changes = parts.loc[parts["sweep"] == sweep, "max_change"].dropna()
         assert (changes > tol).all() and summary["sweeps"][sweep]["converged_n"] is None, sweep

@@ -19,7 +19,7 @@ SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
     # penalties): one repeat of 3 folds (the shipped 3 x 5 with 12 MLP settings took 115 s here)
     "surrogate": {"neurons": [2, 4], "seeds": [0, 1, 2], "cv_folds": 3, "cv_repeats": 1, "gp_restarts": 0,
                   "ensemble_members": 2, "mlp_sizes": [4], "mlp_alphas": [0.1, 1.0]},
-    "convergence": {"sampling_study": {"seeds": 2, "k_max": 4}},
+    "study_rule": {"sampling_study": {"seeds": 2, "k_max": 4}},
     "maps": {"sobol_n": 128, "sobol_draws": 8, "machine": {"n_h": 3, "n_v": 3}},
     # 10 cases: the surrogate's 3-fold validation needs 8 usable, and a smoke case may be flagged
     # (and a tolerance no smoke run reaches: the loop runs to its budget)
