@@ -139,7 +139,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # the largest's, and spheres are counted at their mean volume by number (spreadmap.case.psd)
     sizes = material["size_distribution"]
     sieves, fractions = psd.sieve_table(d, float(sizes["span"]), sizes["tails"])
-    d_min, d_max = (sieves[0], sieves[-1]) if sieves else (d, d)
+    d_min = sieves[0] if sieves else d
     dt, dt_crit = time_step(d_min, density, material, preset, preset_name)
 
     width = preset["width_d"] * d
@@ -186,8 +186,11 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))
     # makeCloud keeps sphere centres one radius inside the box: size the cloud on that inner box
     # so that it holds n_particles at `cloud_fraction` (it silently places fewer when too tight).
-    inner = (pile_length - d_max) * (width - d_max)
-    cloud_height = n_particles * sphere_volume / (scene["cloud_fraction"] * inner) + d_max
+    # (A size distribution: each sphere keeps its own radius inside, the D50's on average. Sizing on
+    # the largest sphere's instead made the cloud of a pile 2 d long 7x taller at span 1, D50 45 um:
+    # a fall at 0.43 m/s into the pile, overlaps of 8 % R.)
+    inner = (pile_length - d) * (width - d)
+    cloud_height = n_particles * sphere_volume / (scene["cloud_fraction"] * inner) + d
 
     settle_max = scene["settle_time_factor"] * math.sqrt(2.0 * cloud_height / g)
     relax_max = scene["relax_time_factor"] * math.sqrt(2.0 * pile_height / g)
