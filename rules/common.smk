@@ -126,7 +126,7 @@ if config.get("fidelity"):
 
 
 GROW = config["converge"]
-STUDY_RULE = config["study_rule"]  # the study's five-statistic rule (`converge:`, GROW: the main job's loop)
+STUDY_RULE = config["study_rule"]  # the study's five-statistic stopping test; GROW is the main job's loop (config converge)
 
 
 # `snakemake converge` (rules/converge.smk): following its checkpoints
