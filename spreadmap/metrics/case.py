@@ -106,7 +106,7 @@ def measure(raw: dict, settings: dict) -> dict:
     # is nearly gone at its end, shows here even when the flow has no trend within the window
     out["heap_start_h2"], out["heap_end_h2"] = heap_h2(s1, gap, width), heap_h2(s2, gap, width)
     if "blade_start" in raw["snapshots"]:
-        out.update(size_measures(_powder_snapshot(raw["snapshots"]["blade_start"]), s2, x0, x1, gap))
+        out.update(size_measures(raw["snapshots"]["blade_start"], s2, x0, x1, gap))
     return out
 
 
