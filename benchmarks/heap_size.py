@@ -1,0 +1,141 @@
+#!/usr/bin/env python
+"""Does the answer depend on how much powder stands ahead of the blade? MFR and PD against the fed
+heap's size, on both floors, at a thin and a wide gap (issue 50).
+
+The fed heap (scene.fed_heap, shipped) holds `scene.pile_reserve` x h^2 of bulk powder ahead of the
+blade's rear face (plus what fills the gap under the blade): the scene feeds spheres onto its slope
+whenever it falls below that. Arms: the reserve at 1.5, 3, 4.7 (shipped) and 9.4 h^2, on the rough
+floor (shipped) and the study's flat floor; everything else as shipped (`default` preset, adhesion
+on). Points:
+  thin   f 0.30, d 40 um, h 60 um, v 10 mm/s (h/d 1.5)
+  wide   f 0.30, d 20 um, h 70 um, v 10 mm/s (h/d 3.5)
+Each case runs in its own YADE process, two at a time, lowest seed first (a run cut short keeps
+balanced arms), every finished case appended to --csv at once (spreadmap.experiments.arms).
+
+    .venv/bin/python benchmarks/heap_size.py --seeds 1 2 3 --csv docs/heap_size/cases.csv \
+        --summary docs/heap_size/summary.md --keep /tmp/heap_size
+    .venv/bin/python benchmarks/heap_size.py --plan     # spheres and modelled CPU of each case, no run
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from spreadmap import config as spreadmap_config
+from spreadmap.case.scene import scene_parameters
+from spreadmap.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
+from spreadmap.files import write_text_atomically
+from spreadmap.loop.cost import PlannedCost
+
+ROOT = Path(__file__).resolve().parent.parent
+POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0)}
+RESERVES = (1.5, 3.0, 4.7, 9.4)
+ARMS = {f"{floor}_r{r:g}": (floor, r) for floor in ("rough", "flat") for r in RESERVES}
+REFERENCE_ARM = "rough_r4.7"
+COLUMNS = ("arm", "floor", "pile_reserve", "point", "seed", "case_id", "f", "d_um", "h_um", "v_mm_s", "status",
+           "flagged", "flag_reason", "regime", "mfr", "pd", "mfr_sd", "pd_sd", "n_passed", "coverage",
+           "thickness_ratio", "flow_trend", "flow_trend_z", "heap_start_h2", "heap_end_h2", "bond_number",
+           "n_particles", "fed_particles", "rolled_off_particles", "steps", "peak_overlap_free",
+           "peak_overlap_wedged", "cpu_time", "wall_time")
+
+
+def arm_config(base: dict, arm: str) -> dict:
+    """The config of an arm: the shipped one with its floor and heap reserve set."""
+    floor, reserve = ARMS[arm]
+    cfg = copy.deepcopy(base)
+    cfg["scene"]["substrate"]["kind"] = floor
+    cfg["scene"]["pile_reserve"] = reserve
+    return cfg
+
+
+def point_dict(name: str) -> dict:
+    f, d, h, v = POINTS[name]
+    return {"f": f, "d_um": d, "h_um": h, "v_mm_s": v}
+
+
+def run_one(job: dict) -> dict:
+    row, params = run_arm_case(arm_config(job["base"], job["arm"]), "default", point_dict(job["point"]), job["seed"],
+                               job["keep"], COLUMNS)
+    floor, reserve = ARMS[job["arm"]]
+    row.update({"arm": job["arm"], "point": job["point"], "floor": floor, "pile_reserve": reserve})
+    return row
+
+
+def plan(base: dict) -> None:
+    """Spheres, feed count and modelled CPU seconds of each arm's case at each point."""
+    for point in POINTS:
+        for arm in ARMS:
+            cfg = arm_config(base, arm)
+            params = scene_parameters(point_dict(point), "default", cfg, "plan")
+            cpu = PlannedCost(cfg, "default")(np.array([POINTS[point]]))[0]
+            print(f"{point:5s} {arm:12s} spheres {params['n_particles']:5d} heap {params['feed_count']:5d} "
+                  f"steps {params['estimated_steps']:7d} modelled CPU {cpu:6.0f} s")
+
+
+def trend_lines(rows: list[dict]) -> str:
+    """Per point and floor: the least-squares slope of MFR and PD against log2 of the reserve (per
+    doubling of the heap) over every usable case, with its SE from the residuals."""
+    good = [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
+    out = ["", "| point | floor | cases | MFR per doubling of the heap (SE) | PD per doubling (SE) |", "|---|---|---|---|---|"]
+    for point in POINTS:
+        for floor in ("rough", "flat"):
+            group = [r for r in good if r["point"] == point and r["floor"] == floor]
+            if len(group) < 3:
+                continue
+            x = np.log2([number(r["pile_reserve"]) for r in group])
+            cells = []
+            for key in ("mfr", "pd"):
+                y = np.array([number(r[key]) for r in group])
+                design = np.column_stack([np.ones_like(x), x])
+                coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+                resid = y - design @ coef
+                dof = len(y) - 2
+                cov = np.linalg.inv(design.T @ design) * (resid @ resid / dof if dof > 0 else np.nan)
+                cells.append(f"{coef[1]:+.4f} ({np.sqrt(cov[1, 1]):.4f})")
+            out.append(f"| {point} | {floor} | {len(group)} | {cells[0]} | {cells[1]} |")
+    return "\n".join(out) + "\n"
+
+
+def summary(rows: list[dict]) -> str:
+    return arm_summary(rows, POINTS, ARMS, REFERENCE_ARM, keys=("mfr", "pd", "coverage", "flow_trend_z"),
+                       extra={"heap at the window's end (h^2)": lambda ran: (
+                           f"{np.nanmedian([number(r.get('heap_end_h2')) for r in ran]):.2f}"),
+                           "flagged": lambda ran: f"{sum(str(r.get('flagged')) == 'True' for r in ran)} of {len(ran)}"}
+                       ) + trend_lines(rows)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--config", default=str(ROOT / "config.yaml"))
+    ap.add_argument("--plan", action="store_true", help="print each case's planned size and modelled CPU, run nothing")
+    add_arguments(ap, POINTS, ARMS, ARMS, "/tmp/heap_size")
+    if "--plan" in sys.argv:  # --csv is not needed to plan
+        args = ap.parse_args(sys.argv[1:] + ["--csv", "-"])
+        plan(spreadmap_config.load(args.config))
+        return
+    args = ap.parse_args()
+    base = spreadmap_config.load(args.config)
+    out = Path(args.csv)
+    rows = read_rows(out)
+    if not args.summary_only:
+        order = {arm: i for i, arm in enumerate(ARMS)}
+        todo = pending(rows, args, lambda j: (j[2], j[1] == "wide", order[j[0]]))
+        jobs = [{"base": base, "arm": a, "point": p, "seed": s, "keep": args.keep} for a, p, s in todo]
+        print(f"{len(jobs)} cases to run ({len(rows)} already in {out})", flush=True)
+        run_jobs(jobs, run_one, rows, out, COLUMNS, workers=args.workers, describe=lambda row: (
+            f"{row['arm']:11s} {row['point']:5s} s{row['seed']} {row.get('status')} mfr {number(row.get('mfr')):.4f} "
+            f"pd {number(row.get('pd')):.4f} heap {number(row.get('heap_end_h2')):.2f} h^2 "
+            f"trend z {number(row.get('flow_trend_z')):+.2f} n {row.get('n_particles')} cpu {row['cpu_time']:.0f} s "
+            f"{row.get('flag_reason') or ''}"))
+    text = summary(read_rows(out))
+    print(text)
+    if args.summary:
+        write_text_atomically(Path(args.summary), text)
+
+
+if __name__ == "__main__":
+    main()
