@@ -43,6 +43,51 @@ def span(value) -> tuple[float, float]:
     return float(value), float(value)
 
 
+def powder_size(spec: Mapping) -> tuple[tuple[float, float], float | None]:
+    """A powder's size as the maps read it: its D50 as (low, high) [um] and the span it states.
+
+    Parameters
+    ----------
+    spec : Mapping
+        One powder of ``decisions.powders`` (schema-checked): ``d_um`` (one value or a range; one
+        size, or the D50 of the study's distribution), or ``d50_um`` with ``d10_um`` and
+        ``d90_um`` (a certificate) or with ``span``.
+
+    Returns
+    -------
+    tuple
+        ((low, high) of the D50, span): the span is (D90 - D10) / D50 of a certificate, the
+        ``span`` given, or None when the powder states none (it is then taken to have the study's).
+    """
+    if "d_um" in spec:
+        return span(spec["d_um"]), (float(spec["span"]) if "span" in spec else None)
+    d50 = float(spec["d50_um"])
+    if "d10_um" in spec and "d90_um" in spec:
+        return (d50, d50), (float(spec["d90_um"]) - float(spec["d10_um"])) / d50
+    return (d50, d50), (float(spec["span"]) if "span" in spec else None)
+
+
+def powder_problems(name: str, spec: Mapping, study_span: float, tolerance: float) -> list[str]:
+    """What is wrong with one powder beyond its schema: a certificate out of order or half given,
+    a span given twice, a span the study's maps do not speak for (span is not a design axis)."""
+    key = f"config key 'decisions.powders.{name}'"
+    given = [k for k in ("d10_um", "d90_um") if k in spec]
+    if len(given) == 1:
+        return [f"{key}: {given[0]} without {({'d10_um', 'd90_um'} - set(given)).pop()}; give both, or the span"]
+    if given and ("d_um" in spec or "span" in spec):
+        return [f"{key}: d10_um and d90_um go with d50_um and without span (the span is (D90 - D10) / D50)"]
+    if given and not spec["d10_um"] < spec["d50_um"] < spec["d90_um"]:
+        return [f"{key}: D10 {spec['d10_um']:g}, D50 {spec['d50_um']:g}, D90 {spec['d90_um']:g} um must rise"]
+    _, stated = powder_size(spec)
+    if stated is not None and abs(stated - study_span) > tolerance:
+        what = "one size" if study_span == 0 else f"span {study_span:g}"
+        return [f"{key}: span {stated:.2f} but the study's spheres are {what} (material.size_distribution.span "
+                f"{study_span:g}; decisions.span_tolerance {tolerance:g}): span is not a design axis, so the maps do "
+                f"not speak for this powder. Run the study with material.size_distribution.span: {stated:.2f}, "
+                f"or give the powder by d_um alone"]
+    return []
+
+
 def possible_targets(config: Mapping) -> list[str]:
     """The targets the surrogate can have under this (validated) config's ``surrogate.targets``."""
     spec = config["surrogate"]["targets"]
@@ -71,9 +116,12 @@ def problems(config: Mapping) -> list[str]:
         if lo == hi:
             out.append(f"config key 'decisions.machine.{name}': [{lo:g}, {hi:g}] is one value; give the machine's range")
         inside(f"decisions.machine.{name}", name, lo, hi)
+    study_span = float(((config.get("material") or {}).get("size_distribution") or {}).get("span", 0.0))
     for powder, spec in dec["powders"].items():
-        for name in ("f", "d_um"):
-            inside(f"decisions.powders.{powder}.{name}", name, *span(spec[name]))
+        inside(f"decisions.powders.{powder}.f", "f", *span(spec["f"]))
+        size_key = "d_um" if "d_um" in spec else "d50_um"
+        inside(f"decisions.powders.{powder}.{size_key}", "d_um", *powder_size(spec)[0])
+        out += powder_problems(powder, spec, study_span, dec["span_tolerance"])
     allowed = possible_targets(config)
     for target, bound in dec["bounds"].items():
         if target not in allowed:

@@ -46,7 +46,7 @@ from threadpoolctl import threadpool_limits
 
 from ..design import NAMES
 from ..maps import grids
-from .config_section import DecisionError, span
+from .config_section import DecisionError, powder_size, span
 
 STATUSES = ("recommended", "beyond_data", "beyond_data_only", "none_meets")
 BLOCK_POINTS = 400  # design points per joint draw (a GP draw factorises a matrix of this side; cost ~ side^3)
@@ -54,11 +54,14 @@ BLOCK_POINTS = 400  # design points per joint draw (a GP draw factorises a matri
 
 @dataclass(frozen=True)
 class Powder:
-    """A powder: friction and diameter, each (low, high); low == high is one value."""
+    """A powder: friction and diameter (the D50 of a size distribution), each (low, high); low ==
+    high is one value; the span its certificate states (None: it states none)."""
 
     name: str
     f: tuple
     d_um: tuple
+    span: float | None = None
+    size_key: str = "d_um"  # the config key that gave the size (d_um, or a certificate's d50_um)
 
     @property
     def ranged(self) -> bool:
@@ -73,7 +76,9 @@ class Powder:
     def label(self) -> str:
         def one(v, fmt):
             return format(v[0], fmt) if v[0] == v[1] else f"{format(v[0], fmt)}-{format(v[1], fmt)}"
-        return f"{self.name}: f {one(self.f, 'g')}, d {one(self.d_um, 'g')} um"
+        if self.span is None:
+            return f"{self.name}: f {one(self.f, 'g')}, d {one(self.d_um, 'g')} um"
+        return f"{self.name}: f {one(self.f, 'g')}, D50 {one(self.d_um, 'g')} um, span {self.span:.2f}"
 
 
 def powders_from_config(dec: dict) -> list[Powder]:
@@ -83,14 +88,17 @@ def powders_from_config(dec: dict) -> list[Powder]:
     ----------
     dec : dict
         The ``decisions:`` config with defaults (``decision_config``); its ``powders`` maps a
-        name to ``f`` [-] and ``d_um`` [um], each one value or a [low, high] range.
+        name to ``f`` [-] and the size (``config_section.powder_size``: ``d_um`` [um], one value or
+        a [low, high] range, or a certificate's D10 / D50 / D90, or D50 and span).
 
     Returns
     -------
     list of Powder
-        One per powder, f and d_um as (low, high) (low == high for one value).
+        One per powder, f and d_um (the D50) as (low, high) (low == high for one value), and the
+        span it states.
     """
-    return [Powder(name, span(spec["f"]), span(spec["d_um"])) for name, spec in dec["powders"].items()]
+    return [Powder(name, span(spec["f"]), *powder_size(spec), size_key="d_um" if "d_um" in spec else "d50_um")
+            for name, spec in dec["powders"].items()]
 
 
 def setting_grid(dec: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -121,7 +129,7 @@ def check_inputs(model, dec: dict, powders) -> None:
         for name in ("f", "d_um"):
             i = NAMES.index(name)
             lo, hi = getattr(powder, name)
-            key = f"config key 'decisions.powders.{powder.name}.{name}'"
+            key = f"config key 'decisions.powders.{powder.name}.{powder.size_key if name == 'd_um' else name}'"
             if lo < low[i] or hi > high[i]:
                 raise DecisionError(f"{key}: {_show(lo, hi)} lies outside the model's design space "
                                     f"({name} {low[i]:g} to {high[i]:g})")

@@ -220,3 +220,40 @@ def test_the_shipped_decisions_config_is_valid_and_complete(raw_config):
     config = spreadmap_config.validate(copy.deepcopy(raw_config))
     dec = decision_config(config["decisions"])
     assert dec["powders"] and dec["bounds"] and 0 < dec["confidence"] < 1 and dec["about"] in ("run", "mean")
+
+
+@pytest.mark.parametrize("powder, study_span, message", [
+    ({"f": 0.3, "d10_um": 20, "d50_um": 30, "d90_um": 45}, 0.0, "span 0.83 but the study's spheres are one size"),
+    ({"f": 0.3, "d50_um": 30, "span": 1.0}, 0.5, "span 1.00 but the study's spheres are span 0.5"),
+    ({"f": 0.3, "d_um": 30, "span": 0.2}, 0.0, "span is not a design axis"),
+    ({"f": 0.3, "d50_um": 30, "d10_um": 20}, 0.0, "d10_um without d90_um"),
+    ({"f": 0.3, "d10_um": 35, "d50_um": 30, "d90_um": 45}, 0.0, "must rise"),
+    ({"f": 0.3, "d_um": 30, "d10_um": 20, "d90_um": 45}, 0.0, "go with d50_um"),
+])
+def test_a_powder_by_its_certificate_is_refused_when_the_maps_do_not_speak_for_its_span(raw_config, powder,
+                                                                                        study_span, message):
+    config = copy.deepcopy(raw_config)
+    config["material"]["size_distribution"] = {"span": study_span}
+    config["decisions"]["powders"] = {"cert": powder}
+    with pytest.raises(spreadmap_config.ConfigError) as error:
+        spreadmap_config.validate(config)
+    assert "decisions.powders.cert" in str(error.value) and message in str(error.value), str(error.value)
+
+
+def test_a_powder_by_its_certificate_reads_as_its_d50_and_span(raw_config):
+    # a 15-45 um-like certificate (D10 20, D50 30, D90 45 um): span (45 - 20) / 30 = 0.833, within
+    # 0.1 of a study at span 0.9
+    config = copy.deepcopy(raw_config)
+    config["material"]["size_distribution"] = {"span": 0.9}
+    config["decisions"]["powders"] = {"cert": {"f": 0.3, "d10_um": 20, "d50_um": 30, "d90_um": 45},
+                                      "by_span": {"f": [0.3, 0.4], "d50_um": 25, "span": 0.95},
+                                      "plain": {"f": 0.3, "d_um": [20, 30]}}
+    dec = decision_config(spreadmap_config.validate(config)["decisions"])
+    cert, by_span, plain = powders_from_config(dec)
+    assert cert.d_um == (30.0, 30.0) and cert.span == pytest.approx(25.0 / 30.0) and cert.size_key == "d50_um"
+    assert by_span.f == (0.3, 0.4) and by_span.span == 0.95
+    assert plain.d_um == (20.0, 30.0) and plain.span is None and plain.size_key == "d_um"
+    assert cert.label() == "cert: f 0.3, D50 30 um, span 0.83" and plain.label() == "plain: f 0.3, d 20-30 um"
+    config["decisions"]["powders"] = {"both": {"f": 0.3, "d_um": 30, "d50_um": 30}}
+    with pytest.raises(spreadmap_config.ConfigError, match="decisions.powders.both"):
+        spreadmap_config.validate(config)
