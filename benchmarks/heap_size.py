@@ -9,6 +9,8 @@ floor (shipped) and the study's flat floor; everything else as shipped (`default
 on). Points:
   thin   f 0.30, d 40 um, h 60 um, v 10 mm/s (h/d 1.5)
   wide   f 0.30, d 20 um, h 70 um, v 10 mm/s (h/d 3.5)
+  corner f 0.30, d 12 um, h 70 um, v 10 mm/s (h/d 5.8: the costliest corner of the main job, where the
+         heap's h^2 is most of the spheres; run with --points corner, rough floor, two reserves)
 Each case runs in its own YADE process, two at a time, lowest seed first (a run cut short keeps
 balanced arms), every finished case appended to --csv at once (spreadmap.experiments.arms).
 
@@ -32,7 +34,7 @@ from spreadmap.files import write_text_atomically
 from spreadmap.loop.cost import PlannedCost
 
 ROOT = Path(__file__).resolve().parent.parent
-POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0)}
+POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0), "corner": (0.30, 12.0, 70.0, 10.0)}
 RESERVES = (1.5, 3.0, 4.7, 9.4)
 ARMS = {f"{floor}_r{r:g}": (floor, r) for floor in ("rough", "flat") for r in RESERVES}
 REFERENCE_ARM = "rough_r4.7"
@@ -113,6 +115,7 @@ def main() -> None:
     ap.add_argument("--config", default=str(ROOT / "config.yaml"))
     ap.add_argument("--plan", action="store_true", help="print each case's planned size and modelled CPU, run nothing")
     add_arguments(ap, POINTS, ARMS, ARMS, "/tmp/heap_size")
+    ap.set_defaults(points=["thin", "wide"])
     if "--plan" in sys.argv:  # --csv is not needed to plan
         args = ap.parse_args(sys.argv[1:] + ["--csv", "-"])
         plan(spreadmap_config.load(args.config))
@@ -123,7 +126,7 @@ def main() -> None:
     rows = read_rows(out)
     if not args.summary_only:
         order = {arm: i for i, arm in enumerate(ARMS)}
-        todo = pending(rows, args, lambda j: (j[2], j[1] == "wide", order[j[0]]))
+        todo = pending(rows, args, lambda j: (j[2], list(POINTS).index(j[1]), order[j[0]]))
         jobs = [{"base": base, "arm": a, "point": p, "seed": s, "keep": args.keep} for a, p, s in todo]
         print(f"{len(jobs)} cases to run ({len(rows)} already in {out})", flush=True)
         run_jobs(jobs, run_one, rows, out, COLUMNS, workers=args.workers, describe=lambda row: (

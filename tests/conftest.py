@@ -6,9 +6,12 @@ import copy
 import importlib.util
 import json
 import math
+import os
+import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+import psutil
 import pytest
 
 from spreadmap import config as spreadmap_config
@@ -19,6 +22,52 @@ from spreadmap.dryrun import planned_jobs  # noqa: F401  (for the workflow tests
 from spreadmap.files import write_text_atomically
 
 ROOT = Path(__file__).resolve().parent.parent
+PROCESS_TAG = "SPREADMAP_TEST_PROCESS_TAG"  # in the environment of every process a test starts
+SURVIVOR_GRACE_S = 5.0  # a process a test started may take this long to end after it
+
+
+def tagged_survivors(tag: str, since: float) -> list[psutil.Process]:
+    """Running processes created since `since` whose environment carries `tag` (zombies, already
+    dead, are not running)."""
+    found = []
+    for proc in psutil.process_iter(["create_time"]):
+        if proc.pid == os.getpid() or (proc.info["create_time"] or 0.0) < since:
+            continue
+        try:
+            if proc.environ().get(PROCESS_TAG) == tag and proc.status() != psutil.STATUS_ZOMBIE:
+                found.append(proc)
+        except (psutil.NoSuchProcess, psutil.AccessDenied, psutil.ZombieProcess):
+            continue
+    return found
+
+
+@pytest.fixture(autouse=True)
+def leaves_no_process(request):
+    """Every test leaves nothing running: the processes it starts (YADE, Snakemake, its jobs, SLURM
+    jobs, which inherit the environment) carry a tag of the test; any still running
+    SURVIVOR_GRACE_S after the test ends (an orphan too: it keeps its environment when its parent
+    dies) fails the test, and is killed. Fixtures of a wider scope (a SLURM cluster's daemons) are
+    set up before this one and carry no tag."""
+    tag = f"{os.getpid()}:{request.node.nodeid}"
+    since = time.time() - 1.0
+    os.environ[PROCESS_TAG] = tag
+    try:
+        yield
+    finally:
+        os.environ.pop(PROCESS_TAG, None)
+    deadline = time.monotonic() + SURVIVOR_GRACE_S
+    survivors = tagged_survivors(tag, since)
+    while survivors and time.monotonic() < deadline:
+        time.sleep(0.2)
+        survivors = tagged_survivors(tag, since)
+    if survivors:
+        names = [f"{p.pid} {' '.join(p.cmdline()[:4])}" for p in survivors if p.is_running()]
+        for proc in survivors:
+            try:
+                proc.kill()
+            except psutil.NoSuchProcess:
+                pass
+        pytest.fail(f"the test left {len(survivors)} process(es) running (killed now): {names}")
 
 
 @pytest.fixture(scope="session")
