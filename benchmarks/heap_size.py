@@ -110,10 +110,47 @@ def summary(rows: list[dict]) -> str:
                        ) + trend_lines(rows)
 
 
+def figure(rows: list[dict], path: Path) -> None:
+    """MFR and PD against the heap's reserve, a panel per target, a line per point and floor: the
+    seeds' mean and its SE (usable cases), the shipped reserve marked."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    good = [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.8), constrained_layout=True)
+    colours = {"thin": "tab:blue", "wide": "tab:orange", "corner": "tab:green"}
+    for ax, key in zip(axes, ("mfr", "pd")):
+        for point, colour in colours.items():
+            for floor, style in (("rough", "-o"), ("flat", "--s")):
+                xs, ms, ses = [], [], []
+                for r in RESERVES:
+                    y = np.array([number(row[key]) for row in good if row["point"] == point
+                                  and row["floor"] == floor and number(row["pile_reserve"]) == r])
+                    if len(y) >= 2:
+                        xs.append(r), ms.append(y.mean()), ses.append(y.std(ddof=1) / np.sqrt(len(y)))
+                if xs:
+                    ax.errorbar(xs, ms, yerr=ses, fmt=style, color=colour, capsize=3, ms=4,
+                                label=f"{point} (h/d {POINTS[point][2] / POINTS[point][1]:.1f}), {floor} floor")
+        ax.axvline(4.7, color="grey", lw=0.8, ls=":")
+        ax.set_xscale("log", base=2)
+        ax.set_xticks(RESERVES, [f"{r:g}" for r in RESERVES])
+        ax.set_xlabel("heap reserve ahead of the blade (scene.pile_reserve, h^2)")
+        ax.set_ylabel(key.upper() + " (mean of the seeds +- SE)")
+        ax.grid(alpha=0.3)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8)
+    fig.suptitle("Does the heap decide the answer? (adhesive default scene, default preset; dotted: shipped 4.7)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--config", default=str(ROOT / "config.yaml"))
     ap.add_argument("--plan", action="store_true", help="print each case's planned size and modelled CPU, run nothing")
+    ap.add_argument("--figure", help="draw MFR and PD against the reserve to this PNG")
     add_arguments(ap, POINTS, ARMS, ARMS, "/tmp/heap_size")
     ap.set_defaults(points=["thin", "wide"])
     if "--plan" in sys.argv:  # --csv is not needed to plan
@@ -138,6 +175,8 @@ def main() -> None:
     print(text)
     if args.summary:
         write_text_atomically(Path(args.summary), text)
+    if args.figure:
+        figure(read_rows(out), Path(args.figure))
 
 
 if __name__ == "__main__":
