@@ -119,7 +119,20 @@ def t_normal_score(t: float, dof: int) -> float:
     """The standard-normal score of a Student-t statistic with `dof` degrees of freedom: the z
     whose normal tail probability is the t's, sign kept (P(T > t) = P(Z > z)). A t from a noise
     estimate of few degrees of freedom has heavy tails; its score does not, so |z| > 3 is the
-    normal's 0.27 % whatever `dof`. +-inf for an infinite t, nan for nan."""
+    normal's 0.27 % whatever `dof`.
+
+    Parameters
+    ----------
+    t : float
+        The t statistic.
+    dof : int
+        Its degrees of freedom (1 or more).
+
+    Returns
+    -------
+    float
+        The normal score (dimensionless); +-inf for an infinite t, nan for nan or dof < 1.
+    """
     if math.isnan(t) or dof < 1:
         return math.nan
     if t == 0.0:

@@ -140,6 +140,7 @@ PUBLIC_API = [
     ("spreadmap.metrics", "case_metrics"),
     ("spreadmap.metrics.noise", "calibration_factors"),
     ("spreadmap.metrics.noise", "flow_trend_batch_z"),
+    ("spreadmap.metrics.noise", "t_normal_score"),
     ("spreadmap.noise_law.apply", "case_noise"),
     ("spreadmap.noise_law.apply", "check_sections"),
     ("spreadmap.noise_law.cells", "published_cells"),
