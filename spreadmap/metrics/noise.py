@@ -20,10 +20,10 @@ c is checked against a table of seeds by ``spreadmap.noise_law.counting``.
 from __future__ import annotations
 
 import math
-from statistics import NormalDist
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy import stats
 
 from .. import targets
 
@@ -82,39 +82,6 @@ def flow_trend(series, x0: float, x1: float, gap: float, width: float) -> float:
 TREND_MIN_BATCHES = 6
 
 
-def _beta_cf(a: float, b: float, x: float) -> float:
-    """Continued fraction of the regularized incomplete beta function (modified Lentz; Numerical
-    Recipes, 2nd ed., 6.4), converging fast for x < (a + 1) / (a + b + 2)."""
-    tiny, eps = 1e-300, 1e-15
-    c, d = 1.0, 1.0 - (a + b) * x / (a + 1.0)
-    d = 1.0 / (d if abs(d) > tiny else tiny)
-    h = d
-    for m in range(1, 500):
-        for aa in (m * (b - m) * x / ((a - 1.0 + 2 * m) * (a + 2 * m)),
-                   -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 1.0 + 2 * m))):
-            d = 1.0 + aa * d
-            d = 1.0 / (d if abs(d) > tiny else tiny)
-            c = 1.0 + aa / c
-            c = c if abs(c) > tiny else tiny
-            h *= d * c
-        if abs(d * c - 1.0) < eps:
-            break
-    return h
-
-
-def beta_inc(a: float, b: float, x: float) -> float:
-    """Regularized incomplete beta function I_x(a, b) for a, b > 0 and 0 <= x <= 1 (accurate in
-    both tails: the continued fraction on the side where it converges)."""
-    if x <= 0.0:
-        return 0.0
-    if x >= 1.0:
-        return 1.0
-    front = math.exp(math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) + a * math.log(x) + b * math.log1p(-x))
-    if x < (a + 1.0) / (a + b + 2.0):
-        return front * _beta_cf(a, b, x) / a
-    return 1.0 - front * _beta_cf(b, a, 1.0 - x) / b
-
-
 def t_normal_score(t: float, dof: int) -> float:
     """The standard-normal score of a Student-t statistic with `dof` degrees of freedom: the z
     whose normal tail probability is the t's, sign kept (P(T > t) = P(Z > z)). A t from a noise
@@ -135,11 +102,8 @@ def t_normal_score(t: float, dof: int) -> float:
     """
     if math.isnan(t) or dof < 1:
         return math.nan
-    if t == 0.0:
-        return 0.0
-    tail = 0.5 * beta_inc(0.5 * dof, 0.5, dof / (dof + t * t)) if math.isfinite(t) else 0.0  # P(T > |t|)
-    z = -NormalDist().inv_cdf(tail) if tail > 0.0 else math.inf
-    return math.copysign(z, t)
+    # scipy.stats: the t's upper tail, then the normal's inverse tail (both accurate far out)
+    return math.copysign(float(stats.norm.isf(stats.t.sf(abs(t), dof))), t)
 
 
 def flow_trend_batch_z(series, x0: float, x1: float, batches: int) -> tuple[float, int]:
