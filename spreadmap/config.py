@@ -120,11 +120,55 @@ def renamed_sections(config: dict) -> dict:
     return config
 
 
+# config keys renamed inside a section: (section, old key) -> (new key, what changed); the old key is
+# read as the new one where the new one is not given, and ignored where it is (the new one takes
+# precedence), with a warning naming both either way
+RENAMED_KEYS = {("stability", "max_flow_decline_z"): (
+    "max_flow_trend_z", "the bound now holds for a fall and a rise of the flow between the window's halves, "
+                        "in SEs of its own within-window noise (flow_trend_z_batch), where it held for a fall "
+                        "in counting-noise SEs")}
+
+
+def renamed_keys(config: dict) -> dict:
+    """Move the keys under an old name (``RENAMED_KEYS``) to their new name in their section, in
+    place, with a FutureWarning naming both; where the new key is given too it takes precedence
+    and the old one is dropped, with a FutureWarning saying so.
+
+    Called by ``validate`` (so every config the workflow reads) and by readers handed a section
+    that was not validated (``spreadmap.metrics.case.flow_trend_bound``).
+
+    Parameters
+    ----------
+    config : dict
+        A configuration as read from YAML; changed in place (its sections too).
+
+    Returns
+    -------
+    dict
+        The same config, with the new names only.
+    """
+    for (section, old), (new, why) in RENAMED_KEYS.items():
+        part = config.get(section)
+        if not isinstance(part, dict) or old not in part:
+            continue
+        value = part.pop(old)
+        if new in part:
+            warnings.warn(f"config key '{section}.{old}' is deprecated and ignored: '{section}.{new}' is given and "
+                          f"takes precedence ({why}); remove '{section}.{old}'", FutureWarning, stacklevel=2)
+        else:
+            warnings.warn(f"config key '{section}.{old}' is deprecated, read as '{section}.{new}' = {value!r} ({why}); "
+                          f"rename it to '{section}.{new}'", FutureWarning, stacklevel=2)
+            part[new] = value
+    return config
+
+
 def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
     """Validate `config` in place with Snakemake's validator (defaults filled), then the cross-key rules.
 
     A section under its old name (``RENAMED_SECTIONS``: ``convergence`` -> ``study_rule``) is
-    first moved to its new one, with a warning. The schema (schemas/config.schema.yaml) fills every
+    first moved to its new one, and a key under its old name (``RENAMED_KEYS``:
+    ``stability.max_flow_decline_z`` -> ``stability.max_flow_trend_z``) to its new one unless
+    that is given too, each with a warning. The schema (schemas/config.schema.yaml) fills every
     default it has; the cross-key rules are the
     checks a schema cannot express (the presets named exist, ranges with min below max, noise
     calibration regions that are not empty, the noise model's sections, the pictures' points, the
@@ -152,6 +196,7 @@ def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
     from snakemake.utils import validate as snakemake_validate
 
     renamed_sections(config)
+    renamed_keys(config)
     try:
         snakemake_validate(config, str(schema_path), set_default=True)
     except WorkflowError:

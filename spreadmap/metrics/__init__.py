@@ -22,12 +22,12 @@ from .flow import (
     window_passed_volume,
 )
 from .layer import layer_quality, upper_envelope
-from .noise import batch_means_sd, counting_sd, flow_trend
+from .noise import batch_means_sd, counting_sd, flow_trend, flow_trend_batch_z
 from .regime import REGIMES, RULE_KEYS, classify, regime_probabilities
 
 __all__ = ["MAX_WEDGE_OVERLAP", "MIN_HEAP_H2", "NEW_COLUMNS", "PHASES", "REGIMES", "RULE_KEYS", "SETTING_KEYS", "SIZE_COLUMNS",
            "batch_means_sd",
-           "case_metrics", "classify", "counting_sd", "flow_trend", "heap_h2", "heap_volume",
+           "case_metrics", "classify", "counting_sd", "flow_trend", "flow_trend_batch_z", "heap_h2", "heap_volume",
            "layer_density", "layer_quality", "mass_flow_ratio", "measure", "measured_span", "passed_volume",
            "powder", "regime_probabilities", "sphere_volume", "upper_envelope",
            "window_passed_volume"]

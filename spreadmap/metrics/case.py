@@ -9,10 +9,11 @@ import numpy as np
 
 from .. import targets
 from ..case.scene import DENSEST_PACKING
+from ..config import renamed_keys
 from ..schema import checked, section_schema
 from .flow import heap_h2, layer_density, mass_flow_ratio, measured_span, powder, sphere_volume, window_passed_volume
 from .layer import layer_quality
-from .noise import batch_means_sd, counting_sd, flow_trend
+from .noise import batch_means_sd, counting_sd, flow_trend, flow_trend_batch_z
 from .regime import classify
 from .sizes import size_measures
 
@@ -24,7 +25,10 @@ NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_pa
                "peak_overlap_wedged", "wedged", "layer_packing_sd", "coverage_sd", "roughness_d_sd",
                "thickness_ratio_sd",
                # the heap ahead of the blade at the window's start and end, in h^2 (issue 32)
-               "heap_start_h2", "heap_end_h2")
+               "heap_start_h2", "heap_end_h2",
+               # the flow's change between the window's halves in SEs of its within-window noise, the
+               # steady flag's statistic (noise.flow_trend_batch_z; flow_trend_z: counting-noise SEs)
+               "flow_trend_z_batch")
 # NEW_COLUMNS and SIZE_COLUMNS keep the published tables' order; a target registered later in
 # spreadmap.targets brings its columns after them (target_columns)
 # the sizes: the feed's volume quantiles, the gap over D90 and the layer's segregation (issue 51, .sizes)
@@ -42,8 +46,9 @@ MIN_HEAP_H2 = section_schema("stability")["properties"]["min_heap_h2"]["default"
 # (docs/study/cases_converge.csv); a step too large goes further (0.92-0.95 x critical: 1.25-1.48 R, but the
 # whole bed blew up with it; no step was seen unstable near the blade alone: tests/case/test_stability_yade.py)
 MAX_WEDGE_OVERLAP = section_schema("stability")["properties"]["max_wedge_overlap_ratio"]["default"]
-# stability.max_flow_decline_z's default (the schema's): a flow that fell by more counting-noise SEs ran down
-MAX_FLOW_DECLINE_Z = section_schema("stability")["properties"]["max_flow_decline_z"]["default"]
+# stability.max_flow_trend_z's default (the schema's): a flow that fell or rose between the window's
+# halves by more SEs of its within-window noise (flow_trend_z_batch) is not steady (docs/steady_window)
+MAX_FLOW_TREND_Z = section_schema("stability")["properties"]["max_flow_trend_z"]["default"]
 
 
 def _powder_snapshot(snapshot: dict) -> dict:
@@ -93,9 +98,13 @@ def measure(raw: dict, settings: dict) -> dict:
     out["mfr_sd_within"] = batch_means_sd(raw.get("behind_series", []), s1["blade_rear_x"], s2["blade_rear_x"],
                                           gap, width, settings["within_batches"])[0]
     # is the flow steady over the window? (second half - first) / mean, in counting-noise SEs
+    # (flow_trend_z, kept for comparison: the real noise is larger) and in SEs of the flow's own
+    # within-window noise (flow_trend_z_batch: the steady flag's statistic)
     out["flow_trend"] = flow_trend(raw.get("behind_series", []), s1["blade_rear_x"], s2["blade_rear_x"], gap, width)
     se = 2.0 * c / math.sqrt(out["n_passed"]) if out["n_passed"] > 0 else math.nan
     out["flow_trend_z"] = out["flow_trend"] / se if se and math.isfinite(se) else math.nan
+    out["flow_trend_z_batch"] = flow_trend_batch_z(raw.get("behind_series", []), s1["blade_rear_x"], s2["blade_rear_x"],
+                                                   settings["within_batches"])[0]
     layer = layer_quality(s2["positions"], s2["radii"], x0, x1, width, settings["surface_grid_d"] * d,
                           block=settings.get("layer_block_d", LAYER_BLOCK_D) * d)
     out["layer_packing"], out["layer_packing_sd"] = layer["layer_packing"], layer["layer_packing_sd"]
@@ -129,10 +138,28 @@ def flow_fall_reason(trend: float, trend_z: float, heap_end_h2: float, heap_min:
     holds `heap_min` h^2 or more at the window's end did not run down, so the fall is the flow's
     own (unsteady: a heap that builds or slides, a floor the flow has not settled on); a smaller
     heap, or none measured, is a pile that ran down."""
-    fell = f"flow fell by {-trend:.0%} over the window ({trend_z:.1f} SE)"
+    fell = f"flow fell by {-trend:.0%} over the window ({trend_z:.1f} SE of its within-window noise)"
     if heap_min is not None and math.isfinite(heap_end_h2) and heap_end_h2 >= heap_min:
         return f"{fell} with {heap_end_h2:.2f} h^2 still ahead of the blade: the flow is unsteady, the pile did not run down"
     return f"{fell}: the pile ran down"
+
+
+def flow_rise_reason(trend: float, trend_z: float) -> str:
+    """The flag of a flow that rose over the window (the text after the last ': ' is the cause the
+    summaries count): the window opened before the flow had settled (a flow still rising towards
+    its steady value reads an MFR below it)."""
+    return (f"flow rose by {trend:.0%} over the window ({trend_z:.1f} SE of its within-window noise): "
+            f"the flow was still rising in the window: not steady")
+
+
+def flow_trend_bound(stability: dict) -> float | None:
+    """The steady flag's bound on |flow_trend_z_batch| from a `stability` section: its
+    ``max_flow_trend_z``; where a section that was not validated gives only the deprecated
+    ``max_flow_decline_z``, that (with a FutureWarning, ``spreadmap.config.renamed_keys``: the new
+    key takes precedence where both are given); where it gives neither, the schema's default.
+    None: the flag is off."""
+    section = renamed_keys({"stability": dict(stability)})["stability"]
+    return section.get("max_flow_trend_z", MAX_FLOW_TREND_Z)
 
 
 def _applied_bond_number(raw: dict) -> float:
@@ -154,8 +181,9 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         The config's `regime` section (the regime rule's thresholds).
     stability : dict
         The config's `stability` section: ``max_overlap_ratio`` [R] and ``max_escaped`` (spheres);
-        optional ``max_wedge_overlap_ratio`` [R], ``max_flow_decline_z`` (standard errors) and
-        ``min_heap_h2`` [h^2], each None to switch its flag off.
+        optional ``max_wedge_overlap_ratio`` [R], ``max_flow_trend_z`` (standard errors of the
+        flow's within-window noise, either way; the deprecated ``max_flow_decline_z`` is read as it,
+        ``flow_trend_bound``) and ``min_heap_h2`` [h^2], each None to switch its flag off.
     settings : dict
         The config's `metrics` section (``SETTING_KEYS``).
 
@@ -234,10 +262,13 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
     if wedge_max is not None and new["peak_overlap_wedged"] > wedge_max:  # nan (no split) compares False
         flags.append(f"peak overlap {new['peak_overlap_wedged']:.3g} R at spheres the blade presses > {wedge_max} R: "
                      f"beyond any wedge of a sound step")
-    z_max = stability.get("max_flow_decline_z", MAX_FLOW_DECLINE_Z)
+    z_max = flow_trend_bound(stability)
     heap_min = stability.get("min_heap_h2", MIN_HEAP_H2)
-    if z_max is not None and new["flow_trend_z"] < -z_max:  # nan (no series) compares False
-        flags.append(flow_fall_reason(new["flow_trend"], new["flow_trend_z"], new["heap_end_h2"], heap_min))
+    z = new["flow_trend_z_batch"]
+    if z_max is not None and z < -z_max:  # nan (no series, too few batches) compares False
+        flags.append(flow_fall_reason(new["flow_trend"], z, new["heap_end_h2"], heap_min))
+    if z_max is not None and z > z_max:
+        flags.append(flow_rise_reason(new["flow_trend"], z))
     if heap_min is not None and new["heap_end_h2"] < heap_min:  # nan (a failed case) compares False
         flags.append(f"the heap ahead of the blade fell to {new['heap_end_h2']:.2f} h^2 (< {heap_min:g} h^2): "
                      f"the pile ran down")

@@ -11,6 +11,10 @@ travel, from the volume-behind series the scene records every monitor interval (
 by centre there, so each batch carries up to about a sphere of rounding at its ends besides the
 flow's own fluctuation); the SD of the window's MFR is SD(batch MFRs) / sqrt(batches).
 
+Steady flow (issue: the steady-window flag): the change of the flow between the window's halves in
+SEs of that within-window noise (``flow_trend_batch_z``), a standard-normal score whatever the
+number of batches, so that one bound reads the same tail probability everywhere.
+
 c is checked against a table of seeds by ``spreadmap.noise_law.counting``.
 """
 from __future__ import annotations
@@ -19,6 +23,7 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy import stats
 
 from .. import targets
 
@@ -71,6 +76,108 @@ def flow_trend(series, x0: float, x1: float, gap: float, width: float) -> float:
     if first + second <= 0:
         return math.nan
     return float((second - first) / (0.5 * (first + second)))
+
+
+# fewest batches the flow-trend z is defined on: its noise has batches - 4 degrees of freedom
+TREND_MIN_BATCHES = 6
+
+
+def t_normal_score(t: float, dof: int) -> float:
+    """The standard-normal score of a Student-t statistic with `dof` degrees of freedom: the z
+    whose normal tail probability is the t's, sign kept (P(T > t) = P(Z > z)). A t from a noise
+    estimate of few degrees of freedom has heavy tails; its score does not, so |z| > 3 is the
+    normal's 0.27 % whatever `dof`.
+
+    Parameters
+    ----------
+    t : float
+        The t statistic.
+    dof : int
+        Its degrees of freedom (1 or more).
+
+    Returns
+    -------
+    float
+        The normal score (dimensionless); +-inf for an infinite t, nan for nan or dof < 1.
+    """
+    if math.isnan(t) or dof < 1:
+        return math.nan
+    # scipy.stats: the t's upper tail, then the normal's inverse tail (both accurate far out)
+    return math.copysign(float(stats.norm.isf(stats.t.sf(abs(t), dof))), t)
+
+
+def flow_trend_batch_z(series, x0: float, x1: float, batches: int) -> tuple[float, int]:
+    """The flow's change between the window's halves in SEs of its own within-window noise, as a
+    standard-normal score, and the batches it used: (z, b).
+
+    The window [x0, x1] of blade travel is cut into b batches (the largest even number up to
+    `batches` with at least two monitor intervals of the series in each; b >= TREND_MIN_BATCHES)
+    at the series' own points nearest to b equal parts, so that no batch shares an interpolated
+    volume with its neighbour (interpolated edges make neighbours correlate: the z's SD was
+    1.03-1.06 on a steady Poisson flow). Batch i passes volume v_i over travel l_i; its flow is
+    f_i = v_i / l_i, of variance s^2 / l_i for a noise of s^2 per unit travel. The halves' flows
+    are F1 = (sum of v_i) / L1 over the first b/2 batches and F2 likewise (the halves of
+    ``flow_trend``, to within half a monitor interval), and D = F2 - F1 has
+    SE(D) = s sqrt(1/L1 + 1/L2) (2 s_batch / sqrt(b) for b equal batches, s_batch the SD of one
+    batch's flow).
+
+    s is estimated from the batches' scatter about a quadratic in travel plus a jump at the
+    window's middle (weighted least squares, weights l_i; 4 parameters, b - 4 degrees of freedom).
+    The jump and the slope must be in that curve: the plain SD of the batches holds the trend
+    itself (a difference D adds b D^2 / 4 to their sum of squares), so D / (2 SD / sqrt(b)) can
+    never exceed sqrt(b - 1) (2.65 at 8 batches) and a bound of 3 would never fire; the scatter
+    about the halves' own means misses a ramp (a noiseless one reads z 2.8 at 8 batches). D lies in
+    the curve's span, so it is independent of the residuals and t = D / SE follows Student's t
+    with b - 4 degrees of freedom for normal, independent batches, whatever quadratic-plus-jump
+    course the mean flow takes. z is t's normal score (``t_normal_score``): standard normal for a
+    steady flow, so a bound reads the same tail probability at any b.
+
+    Parameters
+    ----------
+    series : sequence of [time, blade_rear_x, volume passed]
+        The scene's volume-behind series (spheres counted by centre), x non-decreasing.
+    x0, x1 : float
+        The window's blade positions [m].
+    batches : int
+        The most batches to use (config ``metrics.within_batches``).
+
+    Returns
+    -------
+    (float, int)
+        z (dimensionless; > 0: the flow rose; +-inf: a change without any noise) and b; (nan, 0)
+        when the series does not cover the window or has too few points for TREND_MIN_BATCHES
+        batches.
+    """
+    arr = np.asarray(series, float).reshape(-1, 3) if len(series) else np.zeros((0, 3))
+    x, vol = arr[:, 1], arr[:, 2]
+    if len(x) < 3 or x1 <= x0 or x[0] > x0 or x[-1] < x1 or np.any(np.diff(x) < 0):
+        return math.nan, 0
+    inside = (x > x0) & (x < x1)
+    nodes = np.concatenate([[x0], x[inside], [x1]])  # the window's ends, interpolated, and the series' points
+    volume = np.concatenate([np.interp([x0], x, vol), vol[inside], np.interp([x1], x, vol)])
+    keep = np.concatenate([[True], np.diff(nodes) > 0])  # repeated points (a blade at rest) once
+    nodes, volume = nodes[keep], volume[keep]
+    intervals = len(nodes) - 1
+    for b in range(min(int(batches), intervals // 2) // 2 * 2, TREND_MIN_BATCHES - 1, -2):
+        cuts = np.unique(np.abs(nodes[:, None] - np.linspace(x0, x1, b + 1)[None, :]).argmin(axis=0))
+        if len(cuts) == b + 1 and np.all(np.diff(cuts) >= 2):
+            break
+    else:
+        return math.nan, 0
+    length, passed = np.diff(nodes[cuts]), np.diff(volume[cuts])
+    flows, w = passed / length, np.sqrt(length)
+    u = (0.5 * (nodes[cuts][1:] + nodes[cuts][:-1]) - 0.5 * (x0 + x1)) / (x1 - x0)
+    design = np.column_stack([np.ones(b), np.arange(b) >= b // 2, u, u * u])
+    q, _ = np.linalg.qr(design * w[:, None])
+    resid = w * flows - q @ (q.T @ (w * flows))
+    first, second = slice(0, b // 2), slice(b // 2, b)
+    l1, l2 = length[first].sum(), length[second].sum()
+    diff = float(passed[second].sum() / l2 - passed[first].sum() / l1)
+    se = math.sqrt(float(resid @ resid) / (b - 4) * (1.0 / l1 + 1.0 / l2))
+    scale = float(passed.sum() / (l1 + l2))
+    if se <= 1e-12 * abs(scale):  # no noise at all (a synthetic series)
+        return (0.0 if abs(diff) <= 1e-12 * abs(scale) else math.copysign(math.inf, diff)), b
+    return t_normal_score(diff / se, b - 4), b
 
 
 # The stated noise SDs of a results table (counting law for MFR and PD, block jackknife for the layer):

@@ -218,6 +218,8 @@ def test_flat_floor_at_the_thinnest_gap_does_not_drain(config, tmp_path):
                              "flow_trend_z", "regime")})
     assert m["heap_end_h2"] > 5 * cfg["stability"]["min_heap_h2"]
     assert m["rolled_off_particles"] < 0.2 * m["n_particles"]
-    assert m["flow_trend_z"] > -cfg["stability"]["max_flow_decline_z"]
+    # the fall in counting-noise SEs, as before; the steady flag reads flow_trend_z_batch, which needs 12
+    # monitor intervals in the window (~10 expected in this 3 d smoke window at 5 mm/s: NaN, no flag)
+    assert m["flow_trend_z"] > -cfg["stability"]["max_flow_trend_z"]
     assert m["mfr"] > cfg["regime"]["jam_mfr_max"]  # powder passes: not a drained, jammed pile
     assert not m["flagged"], m["flag_reason"]

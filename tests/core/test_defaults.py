@@ -97,7 +97,7 @@ CHANGED = {("study_rule", "tolerance"): 0.0125, ("maps", "powder", "h_um"): 61.5
            ("maps", "machine", "f"): 0.35, ("maps", "machine", "n_h"): 4, ("maps", "regime_plane", "v_mm_s"): 12.5,
            ("maps", "support", "max_distance"): 2.5, ("metrics", "counting_noise_c"): 0.41,
            ("metrics", "layer_block_d"): 3.5, ("noise_model", "n_ref"): 175, ("stability", "min_heap_h2"): 0.65,
-           ("stability", "max_wedge_overlap_ratio"): 0.3, ("stability", "max_flow_decline_z"): 2.5,
+           ("stability", "max_wedge_overlap_ratio"): 0.3, ("stability", "max_flow_trend_z"): 2.5,
            ("converge", "cost_law", "ln_a"): -17.5, ("converge", "budget"): 300, ("converge", "acquisition"): "ivr",
            ("converge", "map_error", "tolerance", "pd"): 0.03, ("converge", "ci", "halfwidth", "kurtosis"): 0.45,
            ("converge", "map_change", "box_k"): 4, ("study_rule", "floors", "skewness"): 0.75,
@@ -124,7 +124,7 @@ print(json.dumps({
     "grid_powder": map_grids()["powder"][0].tolist(), "grid_machine_rows": len(map_grids()["machine"]),
     "counting_c": default(apply.case_noise, "counting_c"), "n_ref": getattr(apply, "LAW_REFS", {}).get("n_ref"),
     "block": case.LAYER_BLOCK_D, "heap": case.MIN_HEAP_H2, "wedge": case.MAX_WEDGE_OVERLAP,
-    "decline": getattr(case, "MAX_FLOW_DECLINE_Z", None), "ln_a": cost.DEFAULT_LAW["ln_a"],
+    "decline": getattr(case, "MAX_FLOW_TREND_Z", None), "ln_a": cost.DEFAULT_LAW["ln_a"],
     "step": {k: v for k, v in stepper.step_settings({}).items() if k != "criteria"},
     "criteria": stepper.step_settings(None)["criteria"], "floors": DEFAULT_FLOORS,
     "jitter": floor_of({"scene": {"substrate": {"kind": "rough"}}})[1]}))

@@ -127,9 +127,11 @@ def test_case_metrics_reports_the_heap_at_the_windows_start_and_end():
     assert m["heap_start_h2"] == pytest.approx(h2(72), rel=1e-12)  # 2.39 h^2
     assert m["heap_end_h2"] == pytest.approx(h2(36), rel=1e-12)  # 1.21 h^2
     assert not m["flagged"], m["flag_reason"]
-    # appended after every older column, the sizes' columns (issue 51) after them
-    tail = list(m)[-len(SIZE_COLUMNS) - 2:]
-    assert tail[:2] == ["heap_start_h2", "heap_end_h2"] == list(NEW_COLUMNS[-2:]) and tail[2:] == list(SIZE_COLUMNS)
+    # appended after every older column, the steady flag's batch z (added later) and the sizes'
+    # columns (issue 51) after them
+    tail = list(m)[-len(SIZE_COLUMNS) - 3:]
+    assert tail[:3] == ["heap_start_h2", "heap_end_h2", "flow_trend_z_batch"] == list(NEW_COLUMNS[-3:])
+    assert tail[3:] == list(SIZE_COLUMNS)
 
 
 def test_a_heap_below_the_bound_flags_the_case_naming_the_heap_and_the_bound():
@@ -179,7 +181,7 @@ def test_old_metrics_without_the_heap_load_with_nan_and_the_columns_come_last(tm
         files[-1].write_text(json.dumps(row))
     table = build_table(files, [tmp_path / "none.tsv"] * 2, [{"sweep": "t", "index": i} for i in range(2)])
     assert math.isnan(table.loc[0, "heap_end_h2"]) and table.loc[1, "heap_end_h2"] == pytest.approx(h2(36))
-    assert LAST_COLUMNS[-2:] == ["heap_start_h2", "heap_end_h2"]
-    assert list(table.columns[-len(FLOOR_COLUMNS) - 2:-len(FLOOR_COLUMNS)]) == ["heap_start_h2", "heap_end_h2"]
+    assert LAST_COLUMNS[-3:-1] == ["heap_start_h2", "heap_end_h2"]  # the steady flag's batch z after them
+    assert list(table.columns[-len(FLOOR_COLUMNS) - 3:-len(FLOOR_COLUMNS) - 1]) == ["heap_start_h2", "heap_end_h2"]
     only_old = build_table(files[:1], [tmp_path / "none.tsv"], [{"sweep": "t", "index": 0}])
     assert "heap_end_h2" not in only_old.columns and not only_old.loc[0, "flagged"]

@@ -500,8 +500,10 @@ def test_flow_trend_z_is_standard_normal_for_a_steady_poisson_flow():
 
 
 def test_a_pile_that_runs_down_flags_the_case():
-    """The flow in the window's second half a third of the first's: a trend of -1, ~7 SEs with
-    the record's 40 spheres passed: flagged, with the trend."""
+    """The flow in the window's second half a third of the first's: a trend of -1, ~7 counting-noise
+    SEs with the record's 40 spheres passed (flow_trend_z); the series carries no noise at all, so
+    in SEs of its within-window noise the fall is infinite (flow_trend_z_batch, the flag's
+    statistic): flagged, with the trend."""
     raw = raw_record(layers=1)
     x = np.linspace(9.0, 20.0, 111) * DIAM
     rate = np.where(x < 15 * DIAM, 1.5, 0.5)  # volume per unit travel, in the window's halves
@@ -510,6 +512,7 @@ def test_a_pile_that_runs_down_flags_the_case():
     m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
     assert m["flow_trend"] == pytest.approx(-1.0, rel=0.02)
     assert m["flow_trend_z"] == pytest.approx(-1.0 / (2 * 0.45 / math.sqrt(m["n_passed"])), rel=0.02)
+    assert m["flow_trend_z_batch"] == -math.inf
     # the record's heap (36 spheres in a block 3 d long and 3 d high) still holds at the
     # window's end, so the fall is named the flow's own, not a run-down
     assert m["heap_end_h2"] > 0.7
@@ -518,7 +521,8 @@ def test_a_pile_that_runs_down_flags_the_case():
     # where the heap is below the bound the same fall is a run-down (and the heap's own flag says so)
     thin = dict(BOUNDS, min_heap_h2=m["heap_end_h2"] + 0.01)
     reasons = case_metrics(raw, RULES, thin, SETTINGS)["flag_reason"].split("; ")
-    assert reasons[0] == f"flow fell by {-m['flow_trend']:.0%} over the window ({m['flow_trend_z']:.1f} SE): the pile ran down"
+    assert reasons[0] == (f"flow fell by {-m['flow_trend']:.0%} over the window "
+                          f"({m['flow_trend_z_batch']:.1f} SE of its within-window noise): the pile ran down")
     assert reasons[1].startswith("the heap ahead of the blade fell to")
-    steady = dict(BOUNDS, max_flow_decline_z=None)  # null: never flagged for it
+    steady = dict(BOUNDS, max_flow_trend_z=None)  # null: never flagged for it
     assert not case_metrics(raw, RULES, steady, SETTINGS)["flagged"]
