@@ -25,6 +25,7 @@ rule surrogate:
     log:
         "logs/surrogate.log",
     localrule: True
+    priority: ANALYSES_FIRST
     conda:
         "../envs/analysis.yaml"
     script:
@@ -70,6 +71,7 @@ rule predict:
     log:
         "logs/predict.log",
     localrule: True
+    priority: ANALYSES_FIRST
     conda:
         "../envs/analysis.yaml"
     script:
