@@ -37,6 +37,7 @@ MAIN_JOB = [  # what the main job makes (rule all), before its timeline
     "results/converge/stopped.json",
     "results/summary.json",
     "results/surrogate/model.joblib",
+    *rules.surrogate_validation.output,  # the surrogate's validation: beside the maps, which do not wait for it
     *prediction_targets(),
     "results/maps/sensitivity_ranking_table.csv",
     *rules.decisions.input,

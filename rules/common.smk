@@ -29,6 +29,9 @@ except spreadmap_config.ConfigError as error:
 
 RETRIES = 1  # a crash or a timeout is tried once more, then recorded as failed (a refusal: at once)
 QUICK_FIRST = 10**8  # scheduling priority of the per-case jobs that take a second (render, metrics); above any run's
+# the map model and what reads it (maps, decide, explorer, predict) before the surrogate's validation, which
+# nothing of theirs waits for (run beside them with --cores 2; after them with --cores 1)
+ANALYSES_FIRST = 10
 CASES = {}  # case id -> scene parameters of the YADE script
 CASE_OF = {}  # (rounded design point, preset, seed) -> case id under this config (the content is derived once)
 SETS = {}  # set name ("lds", "lattice", "points", "fidelity", "knobs") -> list of (case id, label)

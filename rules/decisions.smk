@@ -17,6 +17,7 @@ rule decide:
     log:
         "logs/decisions.log",
     localrule: True
+    priority: ANALYSES_FIRST
     conda:
         "../envs/analysis.yaml"
     script:
@@ -39,6 +40,7 @@ rule explorer:
     log:
         "logs/explorer.log",
     localrule: True
+    priority: ANALYSES_FIRST
     conda:
         "../envs/analysis.yaml"
     script:

@@ -26,6 +26,7 @@ rule maps:
     log:
         "logs/maps.log",
     localrule: True
+    priority: ANALYSES_FIRST
     conda:
         "../envs/analysis.yaml"
     script:

@@ -1,12 +1,46 @@
+_SURROGATE_NOISE = dict(  # the cases' noise SDs, the same for the map model and its validation
+    noise_calibration=config["noise_calibration"],
+    noise_model=config.get("noise_model"),  # optional: absent, the stated counting-law SDs
+    counting_c=config["metrics"]["counting_noise_c"],
+)
+SURROGATE_VALIDATION = "results/surrogate/surrogate_metrics.csv"
+
+
 rule surrogate:
-    """The noise-aware surrogate (GP and bootstrap MLP ensemble, validated by repeated k-fold against
-    the noise; the map model trained on every usable case) and the study's MLP protocol beside it."""
+    """The map model: the noise-aware surrogate (GP or bootstrap MLP ensemble, config `surrogate.model`)
+    trained on every usable case, the fidelity correction attached where it applies. What the maps,
+    decisions, explorer and predictions read; its validation is rule surrogate_validation's, which
+    they do not wait for (with `model: best` the validation chooses the model, so this rule waits)."""
     input:
         table=TRAINING_TABLE,
+        **({"validation": SURROGATE_VALIDATION} if config["surrogate"]["model"] == "best" else {}),
     output:
         model="results/surrogate/model.joblib",
         metadata="results/surrogate/model.json",
-        metrics="results/surrogate/surrogate_metrics.csv",
+    params:
+        surrogate=config["surrogate"],
+        ranges=RANGES,
+        **_SURROGATE_NOISE,
+        correction=config["fidelity_correction"] if _CORRECTION else None,  # None where it does not apply
+    log:
+        "logs/surrogate.log",
+    localrule: True
+    priority: ANALYSES_FIRST
+    conda:
+        "../envs/analysis.yaml"
+    script:
+        "../scripts/surrogate.py"
+
+
+rule surrogate_validation:
+    """The surrogate's validation against the noise on cases it never saw (repeated k-fold of the GP
+    and the bootstrap MLP ensemble), the study's MLP protocol beside it and the learning curve: the
+    tables and figures. The main job asks for it; nothing of the maps depends on it."""
+    input:
+        table=TRAINING_TABLE,
+    output:
+        metrics=SURROGATE_VALIDATION,
+        study_runs="results/surrogate/surrogate_study_runs.csv",
         parity=report("results/surrogate/surrogate_parity.png", caption="captions/parity.rst", category="Surrogate"),
         r2=report("results/surrogate/surrogate_r2_vs_neurons.png", caption="captions/r2_vs_neurons.rst",
                   category="Surrogate"),
@@ -14,19 +48,15 @@ rule surrogate:
                         category="Surrogate"),
     params:
         surrogate=config["surrogate"],
-        ranges=RANGES,
-        noise_calibration=config["noise_calibration"],
-        noise_model=config.get("noise_model"),  # optional: absent, the stated counting-law SDs
-        counting_c=config["metrics"]["counting_noise_c"],
+        **_SURROGATE_NOISE,
         floor=FLOOR,
-        correction=config["fidelity_correction"] if _CORRECTION else None,  # None where it does not apply
     log:
-        "logs/surrogate.log",
+        "logs/surrogate_validation.log",
     localrule: True
     conda:
         "../envs/analysis.yaml"
     script:
-        "../scripts/surrogate.py"
+        "../scripts/surrogate_validation.py"
 
 
 rule predict:
@@ -41,6 +71,7 @@ rule predict:
     log:
         "logs/predict.log",
     localrule: True
+    priority: ANALYSES_FIRST
     conda:
         "../envs/analysis.yaml"
     script:

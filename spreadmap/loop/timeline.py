@@ -15,11 +15,11 @@ from datetime import datetime
 import pandas as pd
 
 # What a job is, for the timeline: a DEM case, the loop's own work (its fit and its next batch), the
-# analyses after it (surrogate, maps, decisions, explorer, pictures), or bookkeeping (render, metrics,
+# analyses after it (surrogate and its validation, maps, decisions, explorer, pictures), or bookkeeping (render, metrics,
 # tables: seconds each).
 KINDS = {"run_case": "DEM case", "converge_step": "loop step", "converge": "loop step",
-         "surrogate": "analysis", "maps": "analysis", "decide": "analysis", "explorer": "analysis",
-         "predict": "analysis", "case_picture": "analysis", "run_summary": "analysis"}
+         "surrogate": "analysis", "surrogate_validation": "analysis", "maps": "analysis", "decide": "analysis",
+         "explorer": "analysis", "predict": "analysis", "case_picture": "analysis", "run_summary": "analysis"}
 _STAMP = re.compile(r"^\[(\w{3} \w{3} +\d+ \d\d:\d\d:\d\d \d{4})\]$")
 _START = re.compile(r"^(?:local)?(?:rule|checkpoint) (\w+):$")
 _JOBID = re.compile(r"^\s+jobid: (\d+)$")

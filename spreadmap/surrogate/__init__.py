@@ -3,9 +3,10 @@
 Submodules, one job each: ``settings`` (config, no scikit-learn), ``training_rows`` (usable cases,
 partitions, per-case noise), ``features`` (model inputs), ``noise_sd`` (a new run's noise SD),
 ``models`` (GP and MLP ensemble), ``validation`` (repeated k-fold numbers), ``study_protocol`` (the
-reference study's protocol), ``fitting`` (all of it on a table), ``saved_model`` (file and loading),
-``prediction`` (points in, mean and SDs out), ``cli`` (tools/predict.py, scripts/predict.py), ``plots``,
-``correction`` (the preset-to-reference factor on the maps), ``heldout_points`` (tools/heldout.py).
+reference study's protocol), ``fitting`` (all of it on a table: the map model and its validation,
+apart or together), ``saved_model`` (file and loading), ``prediction`` (points in, mean and SDs
+out), ``cli`` (tools/predict.py, scripts/predict.py), ``plots``, ``correction`` (the
+preset-to-reference factor on the maps), ``heldout_points`` (tools/heldout.py).
 
 Importing this package imports no scikit-learn: config validation reads ``make_config`` from here.
 The other names below are loaded on first use.
@@ -17,7 +18,8 @@ from importlib import import_module
 from .settings import make_config
 
 _LAZY = {
-    "fit_surrogate": "fitting", "SurrogateResult": "fitting",
+    "fit_surrogate": "fitting", "SurrogateResult": "fitting", "fit_map_model": "fitting",
+    "validate_surrogate": "fitting", "SurrogateValidation": "fitting",
     "SurrogateModel": "saved_model", "ModelFileError": "saved_model", "load_model": "saved_model",
     "save_model": "saved_model", "sidecar_path": "saved_model",
     "predict": "prediction", "OutOfRangeWarning": "prediction", "as_points": "prediction",

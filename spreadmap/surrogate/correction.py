@@ -164,6 +164,19 @@ class Correction:
             text += "; " + ", ".join(rest) + f" as `{self.preset}` reads"
         return text
 
+    def attach(self, model) -> None:
+        """Make a fitted map model read as `reference` would: set its ``correction`` and record the
+        factors in its metadata (``fidelity_correction``: label, factors, source).
+
+        Parameters
+        ----------
+        model : spreadmap.surrogate.saved_model.SurrogateModel
+            The map model, changed in place (its fit is not touched).
+        """
+        model.correction = self
+        model.metadata["fidelity_correction"] = {"label": self.label(model.targets), "factors": self.factors,
+                                                 "source": self.source}
+
 
 def applies(config: dict | None) -> str | None:
     """Why the config's `fidelity_correction` does not apply to the run it configures (measured for

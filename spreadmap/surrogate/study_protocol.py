@@ -35,11 +35,16 @@ def study_mlp(neurons: int, seed: int) -> TransformedTargetRegressor:
                                       transformer=StandardScaler())
 
 
+def split(n: int, cfg: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The study's one split of n cases: (training indices, held-out indices)."""
+    tr, te = train_test_split(np.arange(n), test_size=float(cfg["test_fraction"]), random_state=int(cfg["split_seed"]))
+    return tr, te
+
+
 def run_protocol(rows: TrainingRows, targets, cfg: dict) -> pd.DataFrame:
     """One row per (target, neurons, seed): r2_test, r2_train, n_train, n_test, converged."""
     X = rows.X
-    tr, te = train_test_split(np.arange(len(rows)), test_size=float(cfg["test_fraction"]),
-                              random_state=int(cfg["split_seed"]))
+    tr, te = split(len(rows), cfg)
     out = []
     for t in targets:
         y = rows.y(t)

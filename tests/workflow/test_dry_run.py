@@ -3,7 +3,7 @@ the workflow's lint. Cheap: no YADE, a few seconds each."""
 import re
 import subprocess
 
-from conftest import ROOT, SNAKEMAKE, make_workflow, planned_jobs, snakemake
+from conftest import ROOT, SNAKEMAKE, make_workflow, planned_jobs, snakemake, write_config
 
 DROP = ("points", "pictures")  # the tests give their own
 
@@ -16,7 +16,7 @@ def test_main_job_plans_without_chosen_points(tmp_path):
     assert dry.returncode == 0, dry.stderr[-3000:]
     jobs = planned_jobs(dry.stdout)
     assert "predict" not in jobs and "results/surrogate/predictions.csv" not in dry.stdout
-    assert jobs["surrogate"] == 1 and jobs["all"] == 1
+    assert jobs["surrogate"] == 1 and jobs["surrogate_validation"] == 1 and jobs["all"] == 1
 
 
 def test_main_job_predicts_the_chosen_points(tmp_path):
@@ -25,6 +25,47 @@ def test_main_job_predicts_the_chosen_points(tmp_path):
     dry = snakemake(wf, "-n")
     assert dry.returncode == 0, dry.stderr[-3000:]
     assert planned_jobs(dry.stdout)["predict"] == 1
+
+
+def rule_edges(dot: str) -> set[tuple[str, str]]:
+    """(upstream rule, downstream rule) of `snakemake --rulegraph`'s dot text."""
+    labels = dict(re.findall(r'^\s*(\d+)\[label = "(\w+)"', dot, re.M))
+    return {(labels[a], labels[b]) for a, b in re.findall(r"^\s*(\d+) -> (\d+)", dot, re.M)}
+
+
+def upstream(edges: set[tuple[str, str]], rule: str) -> set[str]:
+    """Every rule that `rule` waits for."""
+    found, todo = set(), [rule]
+    while todo:
+        below = todo.pop()
+        for a, b in edges:
+            if b == below and a not in found:
+                found.add(a)
+                todo.append(a)
+    return found
+
+
+def test_the_maps_do_not_wait_for_the_surrogates_validation(tmp_path):
+    """Issue 50: the map model and its validation are two rules; the maps, the decisions, the
+    explorer and the predictions wait for the model only, the main job (and its timeline) for both.
+    With `surrogate.model: best` the validation chooses the model: the model waits for it."""
+    point = {"one": {"f": 0.3, "d_um": 30, "h_um": 65, "v_mm_s": 10}}
+    wf = make_workflow(tmp_path, {"points": {"named": point}, "pictures": {"cases": [], "vtk": []}}, DROP)
+    graph = snakemake(wf, "--rulegraph")
+    assert graph.returncode == 0, graph.stderr[-3000:]
+    edges = rule_edges(graph.stdout)
+    for rule in ("maps", "decide", "explorer", "predict"):
+        before = upstream(edges, rule)
+        assert "surrogate" in before and "surrogate_validation" not in before, (rule, before)
+    assert {("surrogate_validation", "all"), ("surrogate_validation", "timeline")} <= edges
+    assert ("converge_table", "surrogate_validation") in edges and ("converge_table", "surrogate") in edges
+    assert "surrogate_validation" not in upstream(edges, "surrogate")
+
+    write_config(wf, {"points": {"named": point}, "pictures": {"cases": [], "vtk": []},
+                      "surrogate": {"model": "best"}}, DROP)
+    best = snakemake(wf, "--rulegraph")
+    assert best.returncode == 0, best.stderr[-3000:]
+    assert ("surrogate_validation", "surrogate") in rule_edges(best.stdout)
 
 
 def test_lint_is_clean():
