@@ -13,7 +13,6 @@ per core, so a busy machine slows both alike.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -21,12 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from spreadmap import config as spreadmap_config
-from spreadmap.case.identity import case_scene
-from spreadmap.case.launcher import run_case
-from spreadmap.case.render import render
-from spreadmap.experiments.arms import number, read_rows, write_rows
+from spreadmap.experiments.arms import number, read_rows, run_arm_case, write_rows
 from spreadmap.files import write_text_atomically
-from spreadmap.metrics.case import case_metrics, overlap_sampling_factor
+from spreadmap.metrics.case import overlap_sampling_factor
 
 ROOT = Path(__file__).resolve().parent.parent
 POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "mid": (0.30, 30.0, 65.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0)}
@@ -35,26 +31,17 @@ COLUMNS = ("arm", "point", "seed", "case_id", "overlap_every", "sampling_factor"
            "peak_overlap_free", "steps", "n_particles", "cpu_time", "wall_time")
 
 
+def every_step(params: dict) -> dict:
+    return {**params, "overlap_every": 1}
+
+
 def run_one(job: dict) -> dict:
     f, d, h, v = POINTS[job["point"]]
     point = {"f": f, "d_um": d, "h_um": h, "v_mm_s": v}
-    cfg = job["config"]
-    cid, params = case_scene(point, "default", cfg, job["seed"])
-    if job["arm"] == "every_step":
-        params = {**params, "overlap_every": 1}
-    folder = Path(job["keep"]) / job["arm"] / cid
-    folder.mkdir(parents=True, exist_ok=True)
-    write_text_atomically(folder / "case.py", render(params))
-    result = run_case(folder / "case.py", folder / "raw.json", folder / "run.log", params["timeout_s"])
-    row = {"arm": job["arm"], "point": job["point"], "seed": job["seed"], "case_id": cid,
-           "overlap_every": params["overlap_every"], "sampling_factor": overlap_sampling_factor(params),
-           "cpu_time": result["cpu_time"], "wall_time": result["wall_time"]}
-    raw = folder / "raw.json"
-    if raw.exists():
-        out = case_metrics(json.loads(raw.read_text()), cfg["regime"], cfg["stability"], cfg["metrics"])
-        row.update({k: out.get(k) for k in COLUMNS if k not in row and k in out})
-    else:
-        row.update({"status": result["outcome"], "flagged": True})
+    row, params = run_arm_case(job["config"], "default", point, job["seed"], Path(job["keep"]) / job["arm"], COLUMNS,
+                               adjust=every_step if job["arm"] == "every_step" else None)
+    row.update({"arm": job["arm"], "point": job["point"], "overlap_every": params["overlap_every"],
+                "sampling_factor": overlap_sampling_factor(params)})
     return row
 
 
