@@ -25,6 +25,7 @@ from pathlib import Path
 from ..files import write_text_atomically
 from .identity import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, keyed_id, readable_id
 from .render import rendered_params, template_sha256
+from .scene import overlap_stride
 
 # The files of a case folder that may record its id, rewritten in place (others, e.g. pictures, are moved untouched).
 TEXT_SUFFIXES = (".py", ".json", ".log", ".txt", ".tsv", ".csv")
@@ -172,9 +173,20 @@ EQUIVALENT_TEMPLATES = {
 }
 
 
+def with_todays_stride(params: dict) -> dict:
+    """The parameters with today's overlap stride (spreadmap.case.scene.overlap_stride): a case that
+    read the peak overlap more often (every step, before issue 50) simulated the same spheres to the
+    bit (benchmarks/overlap_stride.py) and held its stability check to the per-step record, at least
+    as strict; records without the stride are returned as they are."""
+    if "overlap_every" not in params or "contact_time" not in params:
+        return params
+    return {**params, "overlap_every": overlap_stride(params["contact_time"], params["time_step"])}
+
+
 def carry_to_current_template(cases_dir: Path | str, dry_run: bool = False,
                               current: str | None = None) -> dict:
-    """Re-key the finished cases of a template that the current one simulates identically.
+    """Re-key the finished cases of a template that the current one simulates identically, and those
+    that read the peak overlap at another stride (``with_todays_stride``).
 
     (The adhesive cases of template 0ae31d5c9de2bce9 keep their surface energy: only the template's
     hash changes in their parameters.)
@@ -182,7 +194,8 @@ def carry_to_current_template(cases_dir: Path | str, dry_run: bool = False,
     A case folder named by a content id whose recorded parameters (``recorded_params``) name a
     template listed in ``EQUIVALENT_TEMPLATES`` as leading to the current one gets the id of its
     parameters under the current template (the listed parameters added, ``scene_sha256`` the
-    current one): the id the workflow asks for, so the case is not re-run. The id inside its text
+    current one, the overlap stride today's): the id the workflow asks for, so the case is not re-run.
+    Its raw record keeps the parameters it ran with (its metrics read its own stride). The id inside its text
     files is rewritten and modification times kept, as ``migrate_case_folders`` does.
 
     Parameters
@@ -207,10 +220,15 @@ def carry_to_current_template(cases_dir: Path | str, dry_run: bool = False,
         return report
     for folder in sorted(p for p in cases_dir.iterdir() if p.is_dir() and re.fullmatch(CASE_ID_PATTERN, p.name)):
         params, source = recorded_params(folder)
-        if params is None or EQUIVALENT_TEMPLATES.get(params.get("scene_sha256"), (None,))[0] != current:
+        if params is None:
             continue
-        _, added = EQUIVALENT_TEMPLATES[params["scene_sha256"]]
-        new = keyed_id({**params, **added, "scene_sha256": current})
+        if params.get("scene_sha256") == current:
+            added = {}
+        elif EQUIVALENT_TEMPLATES.get(params.get("scene_sha256"), (None,))[0] == current:
+            _, added = EQUIVALENT_TEMPLATES[params["scene_sha256"]]
+        else:
+            continue
+        new = keyed_id(with_todays_stride({**params, **added, "scene_sha256": current}))
         if folder.name == new:  # carried already (its record keeps the old template's parameters)
             continue
         if keyed_id(params) != folder.name:

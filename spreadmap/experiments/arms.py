@@ -46,8 +46,11 @@ def pending(rows: list[dict], args, order_key) -> list[tuple[str, str, int]]:
     return [job for job in asked if job not in done]
 
 
-def run_arm_case(cfg: dict, preset: str, point: dict, seed: int, keep: Path | str, columns) -> tuple[dict, dict]:
-    """Render, run and measure one case in its own folder under `keep`.
+def run_arm_case(cfg: dict, preset: str, point: dict, seed: int, keep: Path | str, columns,
+                 adjust: Callable[[dict], dict] | None = None) -> tuple[dict, dict]:
+    """Render, run and measure one case in its own folder under `keep`; `adjust` (optional) changes
+    the scene's parameters before rendering (an arm that no config key spells; the case id stays the
+    config's, so give such an arm its own `keep`).
 
     Returns
     -------
@@ -57,6 +60,8 @@ def run_arm_case(cfg: dict, preset: str, point: dict, seed: int, keep: Path | st
         parameters the scene received.
     """
     cid, params = case_scene(point, preset, cfg, seed)
+    if adjust is not None:
+        params = adjust(params)
     folder = Path(keep) / cid
     folder.mkdir(parents=True, exist_ok=True)
     script = folder / "case.py"

@@ -1,6 +1,7 @@
-"""Cases of the scene template before adhesion (issue 49), carried to today's ids without re-running:
-the carried id is the one the workflow computes from scratch for the same point at surface energy 0
-(spreadmap.case.identity.case_id), and nothing else is touched."""
+"""Cases of the scene template before adhesion (issue 49), and cases that read the peak overlap every
+step (before issue 50's stride), carried to today's ids without re-running: the carried id is the one
+the workflow computes from scratch for the same point (spreadmap.case.identity.case_id), and nothing
+else is touched."""
 import copy
 import json
 
@@ -24,9 +25,11 @@ def old_record(config, tmp_path, point=POINT, template=OLD):
 
     _, params = case_scene(point, "default", config)
     size_keys = ("size_span", "psd_sizes", "psd_cumulative")  # added by the size distribution (issue 51)
-    dropped = size_keys + (("surface_energy", "adhesion_gamma") if template == OLD else ())
+    dropped = (size_keys if template != template_sha256() else ()) + (
+        ("surface_energy", "adhesion_gamma") if template == OLD else ())
     params = {k: v for k, v in params.items() if k not in dropped}
     params["scene_sha256"] = template
+    params["overlap_every"] = max(1, int(params["contact_time"] / (8.0 * params["time_step"])))  # before issue 50
     old_id = keyed_id(params)
     params["case_id"] = old_id
     folder = tmp_path / "results" / "cases" / old_id
@@ -77,3 +80,18 @@ def test_an_adhesive_case_of_the_template_before_the_size_distribution_gets_toda
     folder = old_record(config, tmp_path, template="e9640a66ef79dc3a")
     report = carry_to_current_template(folder.parent)
     assert report == {"renamed": [(folder.name, case_id(POINT, "default", config))], "left": []}
+
+
+def test_a_case_of_todays_template_read_every_step_gets_todays_id(config, tmp_path):
+    """The published cases of template 7069f5e574fa3095 read the peak overlap every step (1 at
+    `default`); today's scene reads it every 2: the same spheres to the bit, another id. Carried;
+    its raw record keeps overlap_every 1, which its metrics read."""
+    folder = old_record(config, tmp_path, template=template_sha256())
+    assert json.loads((folder / "raw.json").read_text())["params"]["overlap_every"] == 1
+    want = case_id(POINT, "default", config)
+    assert folder.name != want
+    report = carry_to_current_template(folder.parent)
+    assert report == {"renamed": [(folder.name, want)], "left": []}
+    carried = json.loads((folder.parent / want / "raw.json").read_text())["params"]
+    assert carried["overlap_every"] == 1 and carried["case_id"] == want
+    assert carry_to_current_template(folder.parent) == {"renamed": [], "left": []}
