@@ -245,7 +245,19 @@ def adhesive_cases(docs: Path, pile_reserve: float = 4.7, surface_energy: float 
 
 
 def adhesive_cells(docs: Path, **kwargs) -> pd.DataFrame:
-    """The seed-repeat cells (``seed_cells``) of the adhesive default scene (``adhesive_cases``,
-    whose keyword arguments it takes)."""
+    """The seed-repeat cells of the adhesive default scene.
+
+    Parameters
+    ----------
+    docs : pathlib.Path
+        The repository's docs/ folder.
+    **kwargs : dict
+        ``adhesive_cases``'s keyword arguments (pile_reserve, surface_energy, material, tables).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``seed_cells`` of ``adhesive_cases`` (one row per cell and target); empty without cases.
+    """
     cases = adhesive_cases(docs, **kwargs)
     return seed_cells(cases) if len(cases) else pd.DataFrame()

@@ -138,7 +138,19 @@ def refit_target(cells: pd.DataFrame, base: dict, base_cells: pd.DataFrame | Non
 
 
 def config_entry(law: NoiseLaw) -> dict:
-    """A target's ``noise_model`` entry of a law (rounded as the published config is)."""
+    """A target's ``noise_model`` entry of a fitted law.
+
+    Parameters
+    ----------
+    law : NoiseLaw
+        A law with the terms of ``fit.LAW``, fitted or held.
+
+    Returns
+    -------
+    dict
+        ``rel_sd`` (exp(a), 5 decimals), ``n_exponent`` and ``h_over_d_exponent`` (4 decimals), as
+        the published config rounds them.
+    """
     return {"rel_sd": round(math.exp(law.coefficient("a")), 5), "n_exponent": round(law.coefficient("b_ln_n"), 4),
             "h_over_d_exponent": round(law.coefficient("g_ln_hd"), 4)}
 
