@@ -4,6 +4,7 @@ shipped scene's cases, each once (the published tables, and a small heap-size ta
 of every other scene), and the refit recovers a known level from synthetic seed repeats drawn with a
 known SD: the truth inside its 95 % profile interval, and over 200 synthetic studies covered at about
 the nominal rate."""
+import json
 import math
 
 import numpy as np
@@ -159,3 +160,23 @@ def test_g_is_fitted_only_where_the_points_allow_leaving_one_out():
     assert identified(cells, FREE["level"]) and not identified(cells, FREE["level_g"])
     res = refit_target(cells, DRY, boots=100)
     assert set(res["laws"]) == {"level"} and res["lr_g_base"] is None
+
+
+def test_the_published_adhesive_law_recomputes_from_the_published_seed_repeats():
+    """docs/noise/adhesive (tools/fit_noise_model.py --scene adhesive): its cells and its config block
+    from the published tables and docs/noise's dry law, at the shipped config's scene."""
+    from spreadmap import config as spreadmap_config
+    from spreadmap.noise_law.refit import config_entry
+
+    published = json.loads((DOCS / "noise" / "adhesive" / "law.json").read_text())
+    dry = json.loads((DOCS / "noise" / "law.json").read_text())["targets"]
+    cfg = spreadmap_config.load(ROOT / "config.yaml")
+    cells = adhesive_cells(DOCS, pile_reserve=cfg["scene"]["pile_reserve"],
+                           surface_energy=cfg["material"]["surface_energy_j_m2"], material=cfg["material"])
+    table = pd.read_csv(DOCS / "noise" / "adhesive" / "cells.csv")
+    fit = table[table["role"] == "fit"]
+    assert len(fit) == len(cells) and set(fit["point"]) == set(cells["point"])
+    assert (published["cells"], published["points"]) == (len(cells) // 2, cells["point"].nunique())
+    for target in ("mfr", "pd"):
+        law = refit(cells[cells["target"] == target], dry[target]["law"]["coef"], FREE[published["chosen"]])
+        assert config_entry(law) == published["config"]["noise_model"][target]
