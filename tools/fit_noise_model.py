@@ -10,6 +10,15 @@ one-point-out (spreadmap.noise_law.leave_one_out) beside the stated SDs and the 
 other scenes' arms, and writes to --out: README.md, law.json (the coefficients, their intervals, the
 config block), cells.csv, heldout.csv, terms.csv, by_h_over_d.csv, pooled_by_band.csv, other_arms.csv and the figure
 noise_law.{png,pdf,csv}. Prints the `noise_model` config block.
+
+    .venv/bin/python tools/fit_noise_model.py --scene adhesive [--replay-run docs/main_job/run_2026-12-06]
+
+The adhesive default (the config's surface energy and pile reserve): its few seed repeats
+(spreadmap.noise_law.cells.adhesive_cases) refitted against the dry law of docs/noise/law.json
+(spreadmap.noise_law.refit: the level alone, and the level with the power of h/d), checked
+leave-one-point-out, other pile reserves of docs/heap_size fitted apart (--check-reserve), and with
+--replay-run a published run's stop criteria decided again with each law (spreadmap.loop.recheck).
+Writes to docs/noise/adhesive: README.md, law.json, cells.csv, heldout.csv, replay_<run>.csv.
 """
 from __future__ import annotations
 
@@ -23,12 +32,15 @@ import pandas as pd
 import yaml
 
 from spreadmap import config as spreadmap_config
+from spreadmap.case.powder import bond_number
 from spreadmap.case.substrate import floor_label
 from spreadmap.metrics.noise import calibration_factors
-from spreadmap.noise_law.cells import COUNT, OTHER_ARMS, published_cells
+from spreadmap.noise_law.cells import ADHESIVE_VARIANT, COUNT, OTHER_ARMS, adhesive_cases, adhesive_cells, published_cells
 from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval
 from spreadmap.noise_law.leave_one_out import leave_point_out, predictive_check, scored
 from spreadmap.noise_law.plot import law_figure
+from spreadmap.noise_law.refit import FREE, config_entry, refit, refit_target
+from spreadmap.table import usable
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -119,9 +131,16 @@ def other_arms(other: pd.DataFrame, laws: dict, boots: int) -> tuple[pd.DataFram
 
 
 def config_block(laws: dict) -> dict:
-    return {"n_ref": N_REF, "h_over_d_ref": HD_REF,
-            **{t: {"rel_sd": round(math.exp(law.coefficient("a")), 5), "n_exponent": round(law.coefficient("b_ln_n"), 4),
-                   "h_over_d_exponent": round(law.coefficient("g_ln_hd"), 4)} for t, law in laws.items()}}
+    return {"n_ref": N_REF, "h_over_d_ref": HD_REF, **{t: config_entry(law) for t, law in laws.items()}}
+
+
+def law_json(law, profile) -> dict:
+    """A fitted law in law.json: its terms, coefficients, held terms, profile intervals, Wald SEs,
+    covariance, log-likelihood, cells and degrees of freedom."""
+    return {"terms": list(law.terms), "coef": dict(zip(law.terms, map(float, law.coef))),
+            "fixed": law.fixed, "profile_95": {t: list(map(float, v)) for t, v in profile.items()},
+            "wald_se": dict(zip(law.terms, map(float, np.sqrt(np.diag(law.cov))))),
+            "cov": law.cov.tolist(), "loglik": law.loglik, "cells": law.cells, "dof": law.dof}
 
 
 def ci(value, lo, hi, fmt="{:.3f}") -> str:
@@ -149,6 +168,9 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "",
         "Written by `tools/fit_noise_model.py` from the published tables (nothing re-run):",
         "`.venv/bin/python tools/fit_noise_model.py`. Intervals are 95 % unless said otherwise.",
+        "",
+        "This is the law of the dry scene (`material.surface_energy_j_m2: 0`). The adhesive default's own law, refitted on "
+        "its seed repeats against this one (`--scene adhesive`): [docs/noise/adhesive](adhesive/README.md).",
         "",
         "## What is fitted, on what",
         "",
@@ -422,12 +444,449 @@ def arm_sentence(arms: pd.DataFrame) -> str:
     return " ".join(parts)
 
 
-def main() -> None:
+# ----------------------------------------------------------------------------------------------
+# --scene adhesive: the adhesive default's few seed repeats, refitted against the dry law
+# ----------------------------------------------------------------------------------------------
+LAW_NAMES = {"level": "the level a free, b and g the dry law's",
+             "level_g": "the level a and the power of h/d g free, b the dry law's"}
+FACTOR_HD = (1.1, 1.5, 2.0, 3.0, 4.0, 6.0, 7.5)
+CHECK_NAMES = {"base law": "dry law (docs/noise), as it is", "stated SDs": "stated counting SDs, as they are"}
+CHECK_HEADER = "R (chi-square; bootstrap over points) | verdict | a case's 90 % interval holds | KS p"
+
+
+def adhesive_fit(docs: Path, cfg: dict, heap_size: Path | None, pile_reserve: float, dry_law: dict,
+                 dry_cells: pd.DataFrame, boots: int) -> tuple[pd.DataFrame, dict]:
+    """The adhesive scene's cells at one pile reserve and, per target, ``refit_target``'s results
+    (empty when there are no cells; a target without a second point gets none)."""
+    tables = {"heap_size/cases.csv": heap_size} if heap_size else None
+    cells = adhesive_cells(docs, pile_reserve=pile_reserve, surface_energy=float(cfg["material"]["surface_energy_j_m2"]),
+                           material=cfg["material"], tables=tables)
+    if cells.empty or cells["point"].nunique() < 2:
+        return cells, {}
+    results = {t: refit_target(cells[cells["target"] == t], dry_law[t], dry_cells[dry_cells["target"] == t],
+                               ADHESIVE_VARIANT, boots, FACTOR_HD, N_REF) for t in TARGETS}
+    return cells, results
+
+
+def choose_law(results: dict, wanted: str) -> str:
+    """The law of the config block: `wanted`, or for auto level_g where the likelihood-ratio test
+    rejects the dry law's g (5 %) for either target (MFR and PD are one signal: PD ~ MFR) and
+    level_g is identified for both, else level."""
+    if wanted != "auto":
+        return wanted
+    rejects = any(r["lr_g_base"] is not None and r["lr_g_base"][2] < 0.05 for r in results.values())
+    return "level_g" if rejects and all("level_g" in r["laws"] for r in results.values()) else "level"
+
+
+def adhesive_cells_table(cells: pd.DataFrame, results: dict, dry_law: dict, role: str) -> pd.DataFrame:
+    """cells.csv's rows: each cell with its seed SD, the dry law's SD, each refit's SD (all cells)
+    and held-out SD (without the cell's point)."""
+    out = []
+    for t in TARGETS:
+        part = cells[cells["target"] == t].reset_index(drop=True)
+        part = part.assign(sd=np.sqrt(part["s2"]), sd_dry_law=refit(part, dry_law[t], ()).sd(part), role=role)
+        for name, law in results.get(t, {}).get("laws", {}).items():
+            part[f"sd_{name}"] = law.sd(part)
+            part[f"sd_{name}_heldout"] = results[t]["heldout"][name]["sd_pred"].to_numpy()
+        out.append(part)
+    table = pd.concat(out, ignore_index=True)
+    return table.assign(dev=table["dev"].map(lambda d: ";".join(f"{x:.6g}" for x in d)))
+
+
+def run_replay(run_dir: Path, cfg: dict, laws: dict) -> pd.DataFrame:
+    """A run's stop criteria at each of its steps: as published, and decided again (the loop's own
+    code, spreadmap.loop.recheck) with each law of `laws` (label -> noise_model)."""
+    from spreadmap.loop.recheck import path_rows, recheck_path, run_steps
+    from spreadmap.schema import checked
+
+    steps = run_steps(run_dir)
+    settings = checked("converge", cfg["converge"])
+    recorded = steps[0]["settings"]  # what the run recorded of its settings, and its map-error tolerance and margin
+    recorded_error = {t: (v["tolerance"], v["margin"])
+                      for t, v in steps[0]["criteria"]["at_this_batch"]["map_error"]["targets"].items()}
+    error = {t: (tol, settings["map_error"]["margin"]) for t, tol in settings["map_error"]["tolerance"].items()}
+    if {k: settings[k] for k in recorded} != recorded or recorded_error != error:
+        raise ValueError(f"{run_dir}: the run's loop settings {recorded} {recorded_error} are not the config's")
+    table = pd.read_csv(run_dir / "cases.csv")
+    rows = path_rows(steps, "published")
+    for label, noise_model in laws.items():
+        rows += path_rows(recheck_path(table, cfg, steps, noise_model), label)
+    return pd.DataFrame(rows)
+
+
+def main_adhesive(a) -> None:
+    cfg = spreadmap_config.load(a.config)
+    if float(cfg["material"]["surface_energy_j_m2"]) <= 0:
+        raise SystemExit(f"fit_noise_model: {a.config} has no adhesion (material.surface_energy_j_m2 0): "
+                         "its noise law is the dry one, docs/noise")
+    out = a.out or a.docs / "noise" / "adhesive"
+    dry_json = json.loads((a.docs / "noise" / "law.json").read_text())
+    dry_law = {t: dry_json["targets"][t]["law"]["coef"] for t in TARGETS}
+    dry_cells, _ = published_cells(a.docs)
+    reserve = float(cfg["scene"]["pile_reserve"])
+    heap = a.heap_size or a.docs / "heap_size" / "cases.csv"
+    cells, results = adhesive_fit(a.docs, cfg, heap, reserve, dry_law, dry_cells, a.boots)
+    if not results:
+        raise SystemExit("fit_noise_model: fewer than two design points with seed repeats of the adhesive scene")
+    chosen = choose_law(results, a.law)
+    block = {"n_ref": N_REF, "h_over_d_ref": HD_REF, **{t: config_entry(results[t]["laws"][chosen]) for t in TARGETS}}
+    tables = [adhesive_cells_table(cells, results, dry_law, "fit")]
+    checks = {}
+    for other in a.check_reserve:
+        if math.isclose(other, reserve):
+            continue
+        other_cells, other_results = adhesive_fit(a.docs, cfg, heap, other, dry_law, dry_cells, a.boots)
+        if not other_cells.empty:
+            tables.append(adhesive_cells_table(other_cells, other_results, dry_law, f"check_reserve_{other:g}"))
+        checks[other] = (other_cells, other_results)
+    replay = None
+    saved = out / f"replay_{a.replay_run.name}.csv" if a.replay_run is not None else None
+    if saved is not None and a.reuse_replay and saved.exists():
+        replay = pd.read_csv(saved)
+    elif a.replay_run is not None:
+        steps_law = json.loads(sorted(a.replay_run.glob("step_*.json"))[0].read_text())["noise_model"]
+        candidates = {name: {"n_ref": N_REF, "h_over_d_ref": HD_REF,
+                             **{t: config_entry(results[t]["laws"][name]) for t in TARGETS}}
+                      for name in FREE if all(name in results[t]["laws"] for t in TARGETS)}
+        # the chosen law with both levels at the upper ends of their 95 % profile intervals (its exponents as
+        # fitted): how far the answer moves within the refit's uncertainty
+        upper = {**block, **{t: {**block[t], "rel_sd": round(math.exp(results[t]["profile"][chosen]["a"][1]), 5)}
+                             for t in TARGETS}}
+        replay = run_replay(a.replay_run, cfg, {"dry law (as run)": steps_law,
+                                                **{f"adhesive {name}": law for name, law in candidates.items()},
+                                                f"adhesive {chosen}, levels at their upper 95 % ends": upper})
+
+    out.mkdir(parents=True, exist_ok=True)
+    pd.concat(tables, ignore_index=True).to_csv(out / "cells.csv", index=False)
+    check_rows = [{"reserve": r, "target": t, "predictor": name, **row}
+                  for r, (_, res) in [(reserve, (cells, results)), *checks.items()]
+                  for t in res for name, row in res[t]["checks"].items()]
+    pd.DataFrame(check_rows).to_csv(out / "heldout.csv", index=False)
+    if replay is not None:
+        replay.to_csv(out / f"replay_{a.replay_run.name}.csv", index=False)
+
+    def target_json(res):
+        return {"laws": {name: law_json(law, res["profile"][name]) for name, law in res["laws"].items()},
+                "lr_g_dry": None if res["lr_g_base"] is None else dict(zip(("stat", "df", "p"), map(float, res["lr_g_base"]))),
+                "level_ratio_to_dry": list(res["level_ratio"]), "joint_level_ratio_to_dry": list(res["joint_ratio"]),
+                "factor_over_dry": {name: f.to_dict("list") for name, f in res["factors"].items()}}
+    (out / "law.json").write_text(json.dumps({
+        "form": "ln SD = ln value + a + b ln(N / n_ref) + g ln((h/d) / h_over_d_ref); N = n_passed (MFR), n_pd (PD)",
+        "scene": adhesive_scene(cfg, reserve), "base": "docs/noise/law.json (the dry scene's law, fitted with every term)",
+        "n_ref": N_REF, "h_over_d_ref": HD_REF, "cells": int(len(cells) // len(TARGETS)),
+        "points": int(cells["point"].nunique()), "dof": int(cells[cells["target"] == "mfr"]["dof"].sum()),
+        "chosen": chosen, "targets": {t: target_json(results[t]) for t in TARGETS},
+        "checks_other_reserves": {f"{r:g}": {t: target_json(res[t]) for t in res} for r, (_, res) in checks.items()},
+        "config": {"noise_model": block}}, indent=1) + "\n")
+    (out / "README.md").write_text(adhesive_readme(a, cfg, reserve, cells, results, dry_law, chosen, block, checks, replay))
+    print(yaml.safe_dump({"noise_model": block}, sort_keys=False))
+
+
+def adhesive_scene(cfg: dict, reserve: float) -> str:
+    material, preset = cfg["material"], cfg["presets"]["default"]
+    return (f"{floor_label(cfg)}; adhesive spheres (DMT, surface energy {float(material['surface_energy_j_m2']):g} J/m^2 at the "
+            f"`default` preset's density x{preset['density_scale']:g}, the surface energy scaled with it: the Bond number "
+            f"kept), one size, pile reserve {reserve:g} h^2")
+
+
+def _ci(value, interval, fmt="{:.3f}") -> str:
+    return ci(value, *interval, fmt)
+
+
+def _check_cell(row: dict) -> str:
+    return (f"{row['ratio']:.2f} (chi-square {row['ratio_chi2_lo']:.2f}-{row['ratio_chi2_hi']:.2f}; bootstrap "
+            f"{row['ratio_boot_lo']:.2f}-{row['ratio_boot_hi']:.2f}) | {row['verdict']} | {100 * row['coverage90']:.0f} % "
+            f"({100 * row['coverage90_lo']:.0f}-{100 * row['coverage90_hi']:.0f}) {row['coverage_verdict']} | {row['ks_p']:.2f}")
+
+
+def fit_lines(results: dict, dry_law: dict) -> list[str]:
+    """The fitted laws' table rows of the README, per target."""
+    L = ["| target | law | exp(a): relative SD at N = 150, h/d = 2 | c = exp(a) sqrt(150) | g: power of h/d | "
+         "level / dry law's (dry held fixed) | level / dry (joint fit, both uncertain) |",
+         "|---|---|---|---|---|---|---|"]
+    root = math.sqrt(N_REF)
+    for t in TARGETS:
+        r = results[t]
+        a_dry = math.exp(dry_law[t]["a"])
+        L.append(f"| {t.upper()} | dry law (docs/noise) | {a_dry:.4f} | {a_dry * root:.3f} | {dry_law[t]['g_ln_hd']:.2f} "
+                 "| 1 | 1 |")
+        for name, law in r["laws"].items():
+            prof = r["profile"][name]
+            a = law.coefficient("a")
+            g = law.coefficient("g_ln_hd")
+            g_text = _ci(g, prof["g_ln_hd"], "{:.2f}") if "g_ln_hd" in prof else f"{g:.2f} (held)"
+            if name == "level":
+                ratio = _ci(r["level_ratio"][0], r["level_ratio"][1:], "{:.2f}")
+                joint = _ci(r["joint_ratio"][0], r["joint_ratio"][1:], "{:.2f}")
+            else:
+                ratio = joint = "with h/d (below)"
+            L.append(f"| {t.upper()} | {name}: {LAW_NAMES[name]} | {_ci(math.exp(a), np.exp(prof['a']), '{:.4f}')} | "
+                     f"{_ci(math.exp(a) * root, np.exp(prof['a']) * root)} | {g_text} | {ratio} | {joint} |")
+    return L
+
+
+def adhesive_readme(a, cfg, reserve, cells, results, dry_law, chosen, block, checks, replay) -> str:
+    mfr = cells[cells["target"] == "mfr"]
+    n_cells, n_points, n_dof = len(mfr), mfr["point"].nunique(), int(mfr["dof"].sum())
+    heap = a.heap_size or a.docs / "heap_size" / "cases.csv"
+    L = [
+        "# The noise law of the adhesive default scene (a cohesive refit)",
+        "",
+        f"Scene: {adhesive_scene(cfg, reserve)}.",
+        "",
+        *summary_lines(results, chosen, cells, replay, cfg),
+        "",
+        "Written by `tools/fit_noise_model.py --scene adhesive` from the published tables (nothing re-run):",
+        "`.venv/bin/python tools/fit_noise_model.py --scene adhesive --replay-run docs/main_job/run_2026-12-06`"
+        + ("" if Path(heap).resolve().is_relative_to(a.docs.resolve())
+           else f" (`--heap-size {heap}`: the heap-size table before it was committed)")
+        + ". Intervals are 95 % unless said otherwise. The dry law it is set against: [docs/noise](../README.md).",
+        "",
+        "## The cells",
+        "",
+        "The adhesive default's seed repeats (`spreadmap.noise_law.cells.adhesive_cases`): "
+        f"**{n_cells} cells at {n_points} design points, {n_dof} degrees of freedom** per target (`cells.csv`, `role` = fit). "
+        "A row is of the scene when its arm is "
+        "the scene's (docs/adhesion `adh_x1000`, docs/size_distribution `one_size`) or, in docs/heap_size, its columns say "
+        f"rough floor and pile reserve {reserve:g}; it ran the `default` preset (its case id), one size, and its recorded Bond "
+        "number is the shipped surface energy's at its d. The `one_size` cases of docs/size_distribution are the `adh_x1000` "
+        "cases of docs/adhesion (same points, seeds, MFR and PD to the last digit): each counted once (source "
+        "`adhesion_scaling+psd_cost`). The adhesive main job's own cases (docs/main_job/run_2026-12-06) are one seed each. "
+        + left_out_text(a, cfg, reserve),
+        "",
+        "| source | d [um] | h [um] | h/d | Bond | seeds | MFR mean | MFR seed SD | dry law's SD | ratio "
+        "| PD mean | PD seed SD | dry law's SD | ratio |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    table = adhesive_cells_table(cells, results, dry_law, "fit")
+    material = cfg["material"]
+    for _, part in table.groupby("point", sort=False):
+        m, p = (part[part["target"] == t].iloc[0] for t in TARGETS)
+        bond = bond_number(float(material["surface_energy_j_m2"]), material["density_kg_m3"], material["gravity_m_s2"],
+                           m["d_um"] * 1e-6)
+        L.append(f"| {m['source']} | {m['d_um']:g} | {m['h_um']:g} | {m['h_over_d']:.2f} | {bond:.1f} | "
+                 f"{m['seeds']} | {m['mean']:.4f} | {m['sd']:.4f} | {m['sd_dry_law']:.4f} | {m['sd'] / m['sd_dry_law']:.2f} | "
+                 f"{p['mean']:.4f} | {p['sd']:.4f} | {p['sd_dry_law']:.4f} | {p['sd'] / p['sd_dry_law']:.2f} |")
+    L += [
+        "",
+        f"(A ratio is one cell's seed SD over the dry law's SD at its N and h/d; with {mfr['dof'].min()}-{mfr['dof'].max()} "
+        "degrees of freedom a single cell's ratio scatters widely: a 2-seed cell's 95 % range is 0.03-2.2x its true value.)",
+        "",
+        "## The refit",
+        "",
+        "Per target, ln SD = ln value + a + b ln(N / 150) + g ln((h/d) / 2), fitted by the chi-square likelihood of the cells' "
+        "sample variances (`spreadmap/noise_law/fit.py`, as the dry law). "
+        f"{n_points} points cannot pin down three coefficients: "
+        "`spreadmap/noise_law/refit.py` fits the level a alone with b and g held at the dry law's (`level`), and a with g, b "
+        "held (`level_g`; N spans only "
+        f"{mfr['n'].min():.0f}-{mfr['n'].max():.0f} here, so b stays the dry law's). Profile-likelihood intervals. The level "
+        "against the dry law's two ways: with the dry law held fixed (the profile of a), and from one fit of the dry and "
+        "the adhesive cells with an indicator of the adhesive scene (b and g shared), whose interval carries the dry "
+        "law's own uncertainty.",
+        "",
+        *fit_lines(results, dry_law),
+        "",
+    ]
+    for t in TARGETS:
+        lr = results[t]["lr_g_base"]
+        if lr is not None:
+            L.append(f"- {t.upper()}: the dry law's g ({dry_law[t]['g_ln_hd']:.2f}) against the adhesive cells' (likelihood "
+                     f"ratio, 1 dof): {lr[0]:.2f}, p = {lr[2]:.3f}.")
+    L += ["", "The adhesive law's SD over the dry law's, by h/d (at any N: b is the dry law's; Wald 95 % from the refit's "
+          "covariance, the dry law held fixed):", "",
+          "| h/d | " + " | ".join(f"{t.upper()} {name}" for t in TARGETS for name in results[t]["factors"]) + " |",
+          "|---|" + "---|" * sum(len(results[t]["factors"]) for t in TARGETS)]
+    for i, hd in enumerate(FACTOR_HD):
+        vals = [results[t]["factors"][name].iloc[i] for t in TARGETS for name in results[t]["factors"]]
+        L.append(f"| {hd:g} | " + " | ".join(ci(v["factor"], v["lo"], v["hi"], "{:.2f}") for v in vals) + " |")
+    hd_lo, hd_hi = mfr["h_over_d"].min(), mfr["h_over_d"].max()
+    L += ["", f"The cells span h/d {hd_lo:.2f}-{hd_hi:.2f}; beyond that the factor is extrapolated.", "",
+          "## Checked on points it did not see", "",
+          f"Leave one design point out ({n_points} folds; `spreadmap/noise_law/leave_one_out.py`, as for the dry law): each "
+          "refit predicts the left-out point's cells. R = observed over predicted variance (1 if right), with its chi-square "
+          "and its bootstrap-over-points intervals; the verdict is read from their union (called only when both exclude 1); "
+          "the share of seeds inside a case's 90 % interval; the KS p of the PITs. Beside them the dry law and the stated "
+          "counting SDs (c 0.37 / sqrt(N)), as they are (`heldout.csv`).", ""]
+    for t in TARGETS:
+        L += [f"**{t.upper()}**:", "", f"| predictor | {CHECK_HEADER} |", "|---|---|---|---|---|"]
+        for name, row in results[t]["checks"].items():
+            L.append(f"| {CHECK_NAMES.get(name, name)} | {_check_cell(row)} |")
+        L.append("")
+    L += ["With this few points the bootstrap over points spans an order of magnitude, so the union rarely calls a law "
+          "wrong; the chi-square intervals (which hold if the cells scatter as chi2_nu / nu about the law) are the sharper "
+          "reading.", ""]
+    for other, (other_cells, other_results) in checks.items():
+        om = other_cells[other_cells["target"] == "mfr"] if not other_cells.empty else other_cells
+        L += [f"## Check: pile reserve {other:g} h^2 (docs/heap_size arm `rough_r{other:g}`), fitted apart", ""]
+        if not other_results:
+            L += [f"{len(om)} cells at {0 if om.empty else om['point'].nunique()} points: too few to fit.", ""]
+            continue
+        L += [f"{len(om)} cells at {om['point'].nunique()} points, {int(om['dof'].sum())} degrees of freedom per target "
+              f"(h/d {om['h_over_d'].min():.2f}-{om['h_over_d'].max():.2f}; `cells.csv`, role `check_reserve_{other:g}`).", "",
+              *fit_lines(other_results, dry_law), ""]
+        for t in TARGETS:
+            lr = other_results[t]["lr_g_base"]
+            if lr is not None:
+                L.append(f"- {t.upper()}: g = the dry law's, likelihood ratio {lr[0]:.2f}, p = {lr[2]:.3f}.")
+        L += ["", f"| target | predictor | {CHECK_HEADER} |", "|---|---|---|---|---|---|"]
+        for t in TARGETS:
+            for name, row in other_results[t]["checks"].items():
+                L.append(f"| {t.upper()} | {CHECK_NAMES.get(name, name)} | {_check_cell(row)} |")
+        L.append("")
+    if replay is not None:
+        L += replay_lines(replay, a.replay_run)
+    f_values, v_values = (", ".join(f"{x:g}" for x in sorted(mfr[c].unique())) for c in ("f", "v_mm_s"))
+    d_min, h_max = cfg["ranges"]["d_um"]["min"], cfg["ranges"]["h_um"]["max"]
+    box_hd = h_max / d_min
+    L += ["## Limits", "",
+          f"- {n_points} points, {n_dof} degrees of freedom per target, all at f {f_values} and v {v_values} mm/s, h "
+          f"{mfr['h_um'].min():g}-{mfr['h_um'].max():g} um: how the adhesive noise depends on friction and blade speed is not "
+          "measured. h/d is mostly d here, and the Bond number goes as 1/d^2: the law's power of h/d may be the Bond "
+          "number's doing; the two are not told apart.",
+          f"- The power of N is the dry law's (N {mfr['n'].min():.0f}-{mfr['n'].max():.0f} in these cells). Beyond h/d "
+          f"{mfr['h_over_d'].max():.2f} (the box reaches {box_hd:.2g}, d {d_min:g} um at h {h_max:g} um) it is extrapolated.",
+          "- The scene is the shipped x1000 density scaling, which overstates adhesion (docs/adhesion); the law is that "
+          "scene's noise, not the real powder's.",
+          "- The stop margin (`converge.map_error.margin` 1.7) and the cost law were calibrated on dry replays; the replay "
+          "above keeps the run's cases and changes only the noise law.",
+          "",
+          "## The config block", "",
+          f"The law chosen (`--law {a.law}`): **{chosen}** ({LAW_NAMES[chosen]}; auto takes level_g where the likelihood-ratio "
+          "test rejects the dry law's g at 5 % for either target, else level). `law.json` holds both refits, their "
+          "intervals and covariances, and this block:", "", "```yaml",
+          yaml.safe_dump({"noise_model": block}, sort_keys=False).rstrip(), "```", ""]
+    return "\n".join(L) + "\n"
+
+
+def left_out_text(a, cfg: dict, reserve: float) -> str:
+    """The scene's cases a cell leaves out (flagged or not finished), named."""
+    heap = a.heap_size or a.docs / "heap_size" / "cases.csv"
+    cases = adhesive_cases(a.docs, pile_reserve=reserve, surface_energy=float(cfg["material"]["surface_energy_j_m2"]),
+                           material=cfg["material"], tables={"heap_size/cases.csv": heap})
+    out = cases[~usable(cases)]
+    if out.empty:
+        return "Every case of the scene is usable."
+    return ("Left out (flagged or not finished): " + "; ".join(
+        f"d {r['d_um']:g} um seed {r['seed']} ({r['flag_reason'] if isinstance(r['flag_reason'], str) else r['status']})"
+        for _, r in out.iterrows()) + ".")
+
+
+def summary_lines(results: dict, chosen: str, cells: pd.DataFrame, replay: pd.DataFrame | None, cfg: dict) -> list[str]:
+    """The README's opening paragraph: what the cells say of the dry law, the chosen refit, and, with a
+    replay, what it changes for the run's stop."""
+    mfr = cells[cells["target"] == "mfr"]
+    root = math.sqrt(N_REF)
+
+    def dry_check(t):
+        r = results[t]["checks"]["base law"]
+        return f"{t.upper()} {r['ratio']:.1f} (chi-square {r['ratio_chi2_lo']:.1f}-{r['ratio_chi2_hi']:.1f})"
+
+    def law_text(t):
+        law, prof = results[t]["laws"][chosen], results[t]["profile"][chosen]
+        text = f"{t.upper()} c {_ci(math.exp(law.coefficient('a')) * root, np.exp(prof['a']) * root)} at h/d 2"
+        if "g_ln_hd" in prof:
+            text += f", power of h/d {_ci(law.coefficient('g_ln_hd'), prof['g_ln_hd'], '{:+.2f}')}"
+        return text
+
+    def held_text(t):
+        r = results[t]["checks"][f"{chosen}, held out"]
+        return f"{t.upper()} {r['ratio']:.2f} (chi-square {r['ratio_chi2_lo']:.2f}-{r['ratio_chi2_hi']:.2f}), {r['verdict']}"
+
+    lr = [results[t]["lr_g_base"] for t in TARGETS]
+    L = [f"**In short.** {len(mfr)} cells at {mfr['point'].nunique()} points ({int(mfr['dof'].sum())} dof per target, "
+         f"h/d {mfr['h_over_d'].min():.2f}-{mfr['h_over_d'].max():.2f}). The dry law, applied as it is, predicts too little "
+         f"variance: observed over predicted " + ", ".join(dry_check(t) for t in TARGETS) + "."]
+    if all(x is not None for x in lr):
+        L[-1] += (" Its power of h/d is rejected (likelihood ratio p " + ", ".join(f"{x[2]:.3f}" for x in lr)
+                  + " for MFR, PD): the adhesive noise does not fall with h/d.")
+    L[-1] += (f" The refit `{chosen}` ({LAW_NAMES[chosen]}): " + "; ".join(law_text(t) for t in TARGETS)
+              + ". Held out one point at a time, observed over predicted variance " + "; ".join(held_text(t) for t in TARGETS)
+              + ". It is the config's `noise_model` for the adhesive default (config.yaml); a dry config keeps docs/noise's.")
+    if replay is not None:
+        laws = list(dict.fromkeys(replay["law"]))
+        path = replay[replay["law"] == f"adhesive {chosen}"]
+        dry = replay[replay["law"] == "dry law (as run)"]
+        others = [law for law in laws if law.startswith("adhesive") and law != f"adhesive {chosen}"]
+        L += ["", "**The adhesive main job's stop, decided again** (below): with the refit its map error over tolerance reads "
+              + ", ".join(f"{v:.2f}" for v in path["map_error_ratio"]) + f" at {', '.join(str(n) for n in path['n'])} cases "
+              "(dry law, as run: " + ", ".join(f"{v:.2f}" for v in dry["map_error_ratio"]) + "); "
+              + f"it stops at {_stop_text(path)}. "
+              + " ".join(f"`{law[len('adhesive '):]}`: stops at {_stop_text(replay[replay['law'] == law])}." for law in others)
+              + " (`level` holds the dry law's power of h/d, which the cells reject.)"]
+        last = path.iloc[-1]
+        error = cfg["converge"]["map_error"]
+        need = min(error["tolerance"][t] for t in TARGETS) / error["margin"]
+        L[-1] += (f" At {int(last['n'])} cases the refit leaves the CV error net of noise at "
+                  f"MFR {last['mfr_cv_net_of_noise']:.4f}, "
+                  f"PD {last['pd_cv_net_of_noise']:.4f} and the posterior SD at {last['mfr_posterior']:.4f}, "
+                  f"{last['pd_posterior']:.4f}, against the {need:.4f} (tolerance / margin) a stop needs: the noise law "
+                  f"moves the map error from {dry['map_error_ratio'].iloc[-1]:.2f}x to {last['map_error_ratio']:.2f}x its "
+                  "tolerance; the rest is the map's error as the loop estimates it (with the margin calibrated on dry replays).")
+    return L
+
+
+def replay_lines(replay: pd.DataFrame, run_dir: Path) -> list[str]:
+    """The README's replay section: each law's map-error ratio at each step and where it stops."""
+    laws = list(dict.fromkeys(replay["law"]))
+    wide = replay.pivot(index="n", columns="law", values="map_error_ratio")[laws]
+    published, mine = wide["published"], wide.get("dry law (as run)")
+    same = mine is not None and bool(np.allclose(published, mine, rtol=1e-9, atol=0))
+    L = [f"## The adhesive main job's stop criteria, decided again ({run_dir.as_posix().split('docs/')[-1]})", "",
+         "Each step of the run (its cases in run order, its LDS flags) decided again by the loop's own code "
+         "(`spreadmap.loop.recheck.recheck_path` calls `spreadmap.loop.stepper.step`, the map model refitted, the criteria "
+         "recomputed) with each law as `noise_model`; the stop criterion is the map error over its tolerance "
+         "(`converge.map_error`, margin x the larger of the CV error net of noise and the posterior SD; it holds at <= 1). "
+         f"`replay_{run_dir.name}.csv` holds every number. The dry law (as run) "
+         + ("**reproduces the published path to 1e-9**." if same else "**does not reproduce the published path** (see the CSV)."),
+         "", "| cases | " + " | ".join(laws) + " |", "|---|" + "---|" * len(laws)]
+    for n, row in wide.iterrows():
+        L.append(f"| {n} | " + " | ".join(f"{row[law]:.2f}" for law in laws) + " |")
+    L.append("| stops at | " + " | ".join(_stop_text(replay[replay["law"] == law]) for law in laws) + " |")
+    L += ["", "CV error net of noise and the noise it nets out, MFR (`mfr_cv_net_of_noise`, `mfr_cv_noise_sd`):", "",
+          "| cases | " + " | ".join(laws) + " |", "|---|" + "---|" * len(laws)]
+    net = replay.pivot(index="n", columns="law", values="mfr_cv_net_of_noise")[laws]
+    noise = replay.pivot(index="n", columns="law", values="mfr_cv_noise_sd")[laws]
+    for n in net.index:
+        L.append(f"| {n} | " + " | ".join(f"{net.loc[n, law]:.4f} (noise {noise.loc[n, law]:.4f})" for law in laws) + " |")
+    L += ["", "After a step where a law would have stopped, the run's later cases were chosen by the dry-law loop: those "
+          "steps say what the criteria would read on these cases, not what that loop would have run.", ""]
+    return L
+
+
+def _stop_text(rows: pd.DataFrame) -> str:
+    met = rows[rows["reason"] == "criteria met"]
+    if not met.empty:
+        return f"{int(met['n'].iloc[0])} (criteria met)"
+    last = rows.iloc[-1]
+    return f"{int(last['n'])} ({last['reason']})" if last["stop"] else "not stopped"
+
+
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--docs", type=Path, default=ROOT / "docs")
-    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "noise")
+    ap.add_argument("--out", type=Path, default=None, help="default docs/noise (dry), docs/noise/adhesive")
     ap.add_argument("--boots", type=int, default=2000)
-    a = ap.parse_args()
+    ap.add_argument("--scene", choices=("dry", "adhesive"), default="dry",
+                    help="dry: every shipped-scene seed repeat of the dry scene (the law in docs/noise); adhesive: "
+                         "the adhesive default's repeats, refitted against the dry law (docs/noise/adhesive)")
+    ap.add_argument("--config", type=Path, default=ROOT / "config.yaml",
+                    help="adhesive: the config whose scene (surface energy, pile reserve, material) is fitted")
+    ap.add_argument("--heap-size", type=Path, default=None,
+                    help="adhesive: the heap-size benchmark's cases table (default docs/heap_size/cases.csv)")
+    ap.add_argument("--check-reserve", type=float, nargs="*", default=[3.0],
+                    help="adhesive: other pile reserves [h^2] fitted apart as checks (docs/heap_size's arms)")
+    ap.add_argument("--law", choices=("auto", "level", "level_g"), default="auto",
+                    help="adhesive: the law of the config block (auto: level_g where the cells reject the dry g)")
+    ap.add_argument("--replay-run", type=Path, default=None,
+                    help="adhesive: a published main-job run (step_*.json, cases.csv) whose stop criteria are "
+                         "decided again with the dry and the refitted laws (spreadmap.loop.recheck; minutes)")
+    ap.add_argument("--reuse-replay", action="store_true",
+                    help="adhesive: read the replay's CSV already in --out instead of deciding the steps again")
+    a = ap.parse_args(argv)
+    if a.scene == "adhesive":
+        main_adhesive(a)
+        return
+    a.out = a.out or ROOT / "docs" / "noise"
     study_config = spreadmap_config.load(a.docs / "study" / "config.yaml")
     bands = study_config["noise_calibration"]
     stated_c = float(study_config["metrics"]["counting_noise_c"])
@@ -454,11 +913,6 @@ def main() -> None:
     per_band.to_csv(a.out / "pooled_by_band.csv", index=False)
     arms.to_csv(a.out / "other_arms.csv", index=False)
 
-    def law_json(law, profile):
-        return {"terms": list(law.terms), "coef": dict(zip(law.terms, map(float, law.coef))),
-                "fixed": law.fixed, "profile_95": {t: list(map(float, v)) for t, v in profile.items()},
-                "wald_se": dict(zip(law.terms, map(float, np.sqrt(np.diag(law.cov))))),
-                "cov": law.cov.tolist(), "loglik": law.loglik, "cells": law.cells, "dof": law.dof}
     (a.out / "law.json").write_text(json.dumps({
         "form": "ln SD = ln value + a + b ln(N / n_ref) + g ln((h/d) / h_over_d_ref); N = n_passed (MFR), n_pd (PD)",
         "n_ref": N_REF, "h_over_d_ref": HD_REF, "floor": floor,

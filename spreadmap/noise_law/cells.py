@@ -148,3 +148,116 @@ def published_cells(docs: Path) -> tuple[pd.DataFrame, pd.DataFrame]:
     ])
     other = pooled_cases([(precision[precision["arm"].isin(list(OTHER_ARMS))], "precision", "arm")])
     return seed_cells(shipped), seed_cells(other)
+
+
+# The adhesive default scene (issue 49, shipped since 2026-12-06): DMT adhesion, surface energy
+# 1e-4 J/m^2 at the `default` preset's density x1000 (the surface energy scaled with it: the Bond
+# number kept), rough floor, one size, the standing heap `scene.pile_reserve`. Its seed repeats, by
+# published table: (path under docs/, source name, the arm of the shipped scene or None for a table
+# whose scene is read from its columns, the pile reserve [h^2] the table's cases ran at or None where
+# a column says). A table that is absent is skipped (docs/heap_size is appended by a benchmark).
+ADHESIVE_TABLES = (
+    ("adhesion/scaling_cases.csv", "adhesion_scaling", "adh_x1000", 4.7),
+    ("size_distribution/cost_cases.csv", "psd_cost", "one_size", 4.7),
+    ("heap_size/cases.csv", "heap_size", None, None),
+)
+ADHESIVE_VARIANT = "adhesive"
+PRESET_PREFIX = "default-"  # a `default` case's id; another density scale is a preset of its own (`default_density_scale_100-`)
+
+
+def adhesive_cases(docs: Path, pile_reserve: float = 4.7, surface_energy: float = 1e-4, material: dict | None = None,
+                   tables: dict | None = None) -> pd.DataFrame:
+    """The published cases of the adhesive default scene, each case once (``pooled_cases``).
+
+    A row is of the scene when: its arm is the table's shipped arm (`ADHESIVE_TABLES`; a table of
+    one scene variant per arm), or, for docs/heap_size, its columns say rough floor and this
+    `pile_reserve`; it ran the `default` preset (its case id), spheres of one size (``size_span`` 0
+    where the table has it), and its recorded Bond number is that of `surface_energy` at its d
+    (``spreadmap.case.powder.bond_number``, within 1e-4 relative; at another surface energy, or dry,
+    it differs). A table run at another pile reserve is left out. The same point and seed published
+    in two tables must have the same MFR and PD (YADE repeats a run exactly): otherwise the tables'
+    scenes differ and a ValueError says where.
+
+    Parameters
+    ----------
+    docs : pathlib.Path
+        The repository's docs/ folder.
+    pile_reserve : float, optional
+        The scene's standing heap, ``scene.pile_reserve`` [h^2] (4.7 shipped).
+    surface_energy : float, optional
+        The scene's ``material.surface_energy_j_m2`` [J/m^2].
+    material : dict or None, optional
+        The config's ``material`` (``density_kg_m3``, ``gravity_m_s2``); default SS 316L, 7980 and 9.81.
+    tables : dict or None, optional
+        Paths that replace a table of `ADHESIVE_TABLES` (by its path under docs/), e.g. a
+        benchmark's table before it is committed.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The cases (usable or not: ``seed_cells`` keeps the usable ones), with ``source`` and
+        ``variant`` (`ADHESIVE_VARIANT`).
+
+    Raises
+    ------
+    ValueError
+        If a shipped arm's rows are not of the scene (wrong preset, size or Bond number), or the
+        same case reads differently in two tables.
+    """
+    from ..case.powder import bond_number
+
+    material = {"density_kg_m3": 7980.0, "gravity_m_s2": 9.81, **(material or {})}
+    tables = {k: Path(v) for k, v in (tables or {}).items()}
+    picked = []
+    for rel, source, arm, reserve in ADHESIVE_TABLES:
+        path = tables.get(rel, Path(docs) / rel)
+        if not path.exists() or (reserve is not None and not math.isclose(reserve, pile_reserve)):
+            continue
+        table = pd.read_csv(path)
+        if arm is not None:
+            rows = table[table["arm"] == arm]
+        else:
+            rows = table[(table["floor"] == "rough") & np.isclose(table["pile_reserve"], pile_reserve)]
+        rows = rows[rows["case_id"].str.startswith(PRESET_PREFIX)]
+        expected = np.array([bond_number(surface_energy, material["density_kg_m3"], material["gravity_m_s2"], d * 1e-6)
+                             for d in rows["d_um"]])
+        scene = np.isclose(rows["bond_number"].to_numpy(float), expected, rtol=1e-4)
+        if "size_span" in rows:
+            scene &= (rows["size_span"] == 0).to_numpy()
+        if arm is not None and not scene.all():
+            raise ValueError(f"{rel}: arm {arm} holds cases not of the adhesive default scene "
+                             f"(surface energy {surface_energy:g} J/m^2, one size): {list(rows['case_id'][~scene])}")
+        if scene.any():
+            picked.append(rows[scene].assign(source=source, variant=ADHESIVE_VARIANT))
+    if not picked:
+        return pd.DataFrame()
+    cases = pd.concat(picked, ignore_index=True)
+    cases["point"] = point_key(cases)
+    twins = cases[cases.duplicated(["point", "seed"], keep=False)]
+    for (point, seed), same in twins.groupby(["point", "seed"]):
+        if not (np.allclose(same["mfr"], same["mfr"].iloc[0], rtol=0, atol=1e-12)
+                and np.allclose(same["pd"], same["pd"].iloc[0], rtol=0, atol=1e-12)):
+            raise ValueError(f"point {point} seed {seed} reads differently in {list(same['source'])}: not one scene")
+    # one row per case, its source naming every table that published it
+    sources = cases.groupby(["point", "seed"], sort=False)["source"].agg(lambda s: "+".join(dict.fromkeys(s)))
+    cases = cases.drop_duplicates(["point", "seed"]).drop(columns="source")
+    return cases.join(sources, on=["point", "seed"]).drop(columns="point").reset_index(drop=True)
+
+
+def adhesive_cells(docs: Path, **kwargs) -> pd.DataFrame:
+    """The seed-repeat cells of the adhesive default scene.
+
+    Parameters
+    ----------
+    docs : pathlib.Path
+        The repository's docs/ folder.
+    **kwargs : dict
+        ``adhesive_cases``'s keyword arguments (pile_reserve, surface_energy, material, tables).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``seed_cells`` of ``adhesive_cases`` (one row per cell and target); empty without cases.
+    """
+    cases = adhesive_cases(docs, **kwargs)
+    return seed_cells(cases) if len(cases) else pd.DataFrame()

@@ -1,10 +1,12 @@
 """tools/recheck_stop.py: the published loop's last step decided again under another noise
 calibration, with today's map model. Checked against the step the loop itself recorded, and the noise it is held against
-recomputed here from the cases table with numpy (h/d masks written out, not calibrated_noise)."""
+recomputed here from the cases table with numpy (h/d masks written out, not calibrated_noise).
+spreadmap.loop.recheck: every step of a published main-job run decided again with another noise law."""
 import json
 
 import numpy as np
 import pandas as pd
+import pytest
 from conftest import ROOT, script_module
 
 STUDY = ROOT / "docs" / "study"
@@ -43,3 +45,28 @@ def test_a_file_without_a_calibration_is_refused(tmp_path, capsys):
     bad.write_text(json.dumps({"preset": "default"}))
     assert recheck_stop.main(["--calibration", str(bad)]) == 2
     assert "no noise_calibration key (nor a noise_model)" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_runs_steps_decided_again_with_its_own_noise_law_reproduce_its_path():
+    """spreadmap.loop.recheck on the adhesive main job (docs/main_job/run_2026-12-06): its first two
+    steps decided again with the law it ran with give its published map errors (2.57, 1.77) and its
+    next batch, to the bit; with a law twice as noisy, the CV error net of noise falls."""
+    from spreadmap import config as spreadmap_config
+    from spreadmap.loop.recheck import path_rows, recheck_path, run_steps
+
+    run = ROOT / "docs" / "main_job" / "run_2026-12-06"
+    steps = run_steps(run)[:2]
+    table = pd.read_csv(run / "cases.csv")
+    cfg = spreadmap_config.load(ROOT / "config.yaml")
+    law = steps[0]["noise_model"]
+    again = recheck_path(table, cfg, steps, law)
+    for mine, published in zip(again, steps):
+        assert mine["n"] == published["n"] and mine["next_batch"] == published["next_batch"]
+        assert mine["criteria"]["at_this_batch"]["map_error"]["value"] == pytest.approx(
+            published["criteria"]["at_this_batch"]["map_error"]["value"], rel=1e-9)
+    assert [round(r["map_error_ratio"], 2) for r in path_rows(again, "dry")] == [2.57, 1.77]
+    noisier = {**law, **{t: {**law[t], "rel_sd": 2 * law[t]["rel_sd"]} for t in ("mfr", "pd")}}
+    first = path_rows(recheck_path(table, cfg, steps[:1], noisier), "x2")[0]
+    assert first["mfr_cv_noise_sd"] == pytest.approx(2 * path_rows(again, "dry")[0]["mfr_cv_noise_sd"], rel=1e-9)
+    assert first["mfr_cv_net_of_noise"] < path_rows(again, "dry")[0]["mfr_cv_net_of_noise"]

@@ -180,13 +180,21 @@ def test_the_published_law_recomputes_from_the_published_seed_repeats():
 
 
 def test_the_shipped_config_sets_the_published_law_and_the_published_configs_keep_their_bands():
-    """config.yaml's noise_model is docs/noise's fitted law; the published studies' configs have none,
-    so their cases' SDs are the stated ones x the bands they ran with."""
+    """config.yaml's noise_model is the law of its scene: the adhesive default takes docs/noise/adhesive's
+    refit, and its comment gives docs/noise's dry law, word for word, for a dry config; the published
+    studies' configs have none, so their cases' SDs are the stated ones x the bands they ran with."""
     from spreadmap import config as spreadmap_config
 
     shipped = spreadmap_config.load(ROOT / "config.yaml")
-    published = json.loads((ROOT / "docs" / "noise" / "law.json").read_text())["config"]["noise_model"]
-    assert shipped["noise_model"] == published
+    assert shipped["material"]["surface_energy_j_m2"] > 0
+    adhesive = json.loads((ROOT / "docs" / "noise" / "adhesive" / "law.json").read_text())["config"]["noise_model"]
+    assert shipped["noise_model"] == adhesive
+    dry = json.loads((ROOT / "docs" / "noise" / "law.json").read_text())["config"]["noise_model"]
+    text = (ROOT / "config.yaml").read_text()
+    for target in ("mfr", "pd"):
+        law = dry[target]
+        assert (f"#     {target}: {{rel_sd: {law['rel_sd']}, n_exponent: {law['n_exponent']}, "
+                f"h_over_d_exponent: {law['h_over_d_exponent']}}}") in text
     assert all(set(region["targets"]).isdisjoint({"mfr", "pd"}) for region in shipped["noise_calibration"])
     study = spreadmap_config.load(ROOT / "docs" / "study" / "config.yaml")
     assert "noise_model" not in study
