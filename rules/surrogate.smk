@@ -52,6 +52,7 @@ rule surrogate_validation:
         floor=FLOOR,
     log:
         "logs/surrogate_validation.log",
+    threads: 2  # the k-fold validations in parallel, one per target and model (fewer with --cores 1)
     localrule: True
     conda:
         "../envs/analysis.yaml"

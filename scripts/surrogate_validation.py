@@ -17,7 +17,7 @@ log_to(snakemake)  # noqa: F821
 sm = snakemake  # noqa: F821
 # the same table and noise SDs as the map model's (scripts/surrogate.py)
 table = case_noise(read_table(sm.input.table), sm.params.noise_model, sm.params.noise_calibration, sm.params.counting_c)
-result = validate_surrogate(table, sm.params.surrogate)
+result = validate_surrogate(table, sm.params.surrogate, n_jobs=sm.threads)  # a process per core the rule was given
 out = Path(sm.output.metrics).parent
 out.mkdir(parents=True, exist_ok=True)
 write_text_atomically(sm.output.metrics, result.validation.to_csv(index=False))  # what the figures draw, as numbers

@@ -22,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import json
 import platform
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -148,7 +149,14 @@ def chosen_models(cfg: dict, targets, validation: pd.DataFrame | None = None) ->
     return chosen
 
 
-def validate_surrogate(df: pd.DataFrame, config=None, log=print) -> SurrogateValidation:
+def _validate_one(rows, target: str, kind: str, cfg) -> tuple[pd.DataFrame, dict]:
+    """One target's and model's out-of-fold predictions and their summary (a job of
+    ``validate_surrogate``; seeded by the config, so the same in any process)."""
+    oof = validation.out_of_fold(rows, target, kind, cfg)
+    return oof, validation.summarise(oof, float(cfg["interval"]), int(cfg["seed"]))
+
+
+def validate_surrogate(df: pd.DataFrame, config=None, log=print, n_jobs: int = 1) -> SurrogateValidation:
     """The surrogate's validation on a results table: repeated k-fold of both models per target,
     the map model's choice, the study's protocol and the learning curve (steps 2, 3, 5, 6).
 
@@ -161,6 +169,9 @@ def validate_surrogate(df: pd.DataFrame, config=None, log=print) -> SurrogateVal
         The config's ``surrogate:`` section (schema defaults for what it leaves out).
     log : callable, optional
         Called with one line of text per validation.
+    n_jobs : int, optional
+        Processes for the k-fold validations (one job per target and model): the same numbers
+        with any count (each is seeded by the config).
 
     Returns
     -------
@@ -178,15 +189,18 @@ def validate_surrogate(df: pd.DataFrame, config=None, log=print) -> SurrogateVal
     cfg, targets, rows = _usable_rows(df, config)
     notes = []
     val_rows, oof_parts = [], []
-    for t in targets:
-        for kind in KINDS:
-            oof = validation.out_of_fold(rows, t, kind, cfg)
-            s = validation.summarise(oof, float(cfg["interval"]), int(cfg["seed"]))
-            val_rows.append({"target": t, "model": kind, **s})
-            oof_parts.append(oof.assign(target=t, model=kind))
-            log(f"validated {kind} on {t}: RMSE {s['rmse']:.4g} [{s['rmse_low']:.4g}, {s['rmse_high']:.4g}] "
-                f"vs noise SD {s['noise_sd']:.4g} ({s['noise_source']}); coverage {s['coverage']:.3f} "
-                f"[{s['coverage_low']:.3f}, {s['coverage_high']:.3f}] of {s['level']:g}: {s['coverage_verdict']}")
+    jobs = [(t, kind) for t in targets for kind in KINDS]
+    if n_jobs > 1:  # a pool that ends with the call (joblib's loky keeps workers and a tracker alive)
+        with ProcessPoolExecutor(max_workers=n_jobs) as pool:
+            done = list(pool.map(_validate_one, *zip(*[(rows, t, kind, cfg) for t, kind in jobs])))
+    else:
+        done = [_validate_one(rows, t, kind, cfg) for t, kind in jobs]
+    for (t, kind), (oof, s) in zip(jobs, done):
+        val_rows.append({"target": t, "model": kind, **s})
+        oof_parts.append(oof.assign(target=t, model=kind))
+        log(f"validated {kind} on {t}: RMSE {s['rmse']:.4g} [{s['rmse_low']:.4g}, {s['rmse_high']:.4g}] "
+            f"vs noise SD {s['noise_sd']:.4g} ({s['noise_source']}); coverage {s['coverage']:.3f} "
+            f"[{s['coverage_low']:.3f}, {s['coverage_high']:.3f}] of {s['level']:g}: {s['coverage_verdict']}")
     val = pd.DataFrame(val_rows)
     chosen = {}
     for t in targets:

@@ -115,7 +115,7 @@ def test_the_scripts_save_the_model_the_single_rule_saved(config, single_rule, t
         input=SimpleNamespace(table=str(TABLE)), log=[str(tmp_path / "surrogate_validation.log")],
         output=SimpleNamespace(metrics=str(out / "surrogate_metrics.csv"),
                                study_runs=str(out / "surrogate_study_runs.csv")),
-        params=SimpleNamespace(surrogate=QUICK, floor="flat floor; dry", **noise))
+        params=SimpleNamespace(surrogate=QUICK, floor="flat floor; dry", **noise), threads=1)
     runpy.run_path(str(ROOT / "scripts" / "surrogate_validation.py"), init_globals={"snakemake": validation_rule},
                    run_name="__main__")
 
@@ -172,3 +172,11 @@ def test_a_validation_of_another_config_or_table_is_refused(table):
     assert fitting.chosen_models(make_config({**QUICK, "model": "best"}), targets, mlp) == {"mfr": "mlp",
                                                                                                    "pd": "mlp"}
     assert fitting.chosen_models(cfg, targets) == {"mfr": "gp", "pd": "gp"}
+
+
+def test_the_validation_in_two_processes_is_the_validation_in_one(table, single_rule):
+    """The rule runs the k-fold validations a process per core (joblib); the tables are the single
+    process's (the single rule's path ran with n_jobs 1), to the bit."""
+    two = fitting.validate_surrogate(table, QUICK, n_jobs=2, **SILENT)
+    pd.testing.assert_frame_equal(two.validation, single_rule.validation, check_exact=True)
+    pd.testing.assert_frame_equal(two.oof, single_rule.oof, check_exact=True)
