@@ -23,9 +23,8 @@ import pandas as pd
 import yaml
 
 from spreadmap import config as spreadmap_config
-from spreadmap.loop.cost import PlannedCost
-from spreadmap.loop.model import make_map_fit
-from spreadmap.loop.stepper import step, step_number
+from spreadmap.loop.recheck import redecide
+from spreadmap.loop.stepper import step_number
 from spreadmap.noise_law.apply import case_noise, check_sections
 
 
@@ -44,10 +43,7 @@ def recheck(table: pd.DataFrame, cfg: dict, last: dict, previous: dict, calibrat
     if len(table) != n:
         raise ValueError(f"the last step is after {n} cases; the cases table has {len(table)} rows")
     noisy = case_noise(table, noise_model, calibration, cfg["metrics"]["counting_noise_c"])
-    return step(noisy, n, cfg["converge"], previous,
-                fit=make_map_fit(cfg["surrogate"], final=True), ranges=cfg["ranges"], maps_cfg=cfg["maps"],
-                lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["study_rule"]["tolerance"],
-                floors=cfg["study_rule"].get("floors"), cost=PlannedCost.from_config(cfg))
+    return redecide(noisy, n, cfg, previous)
 
 
 def cv_lines(name: str, record: dict) -> list[str]:

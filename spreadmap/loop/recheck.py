@@ -47,6 +47,35 @@ def run_steps(run_dir: Path | str) -> list[dict]:
     return [json.loads(p.read_text()) for p in paths]
 
 
+def redecide(cases: pd.DataFrame, n: int, cfg: Mapping, previous: Mapping | None, fit=None, cost=None) -> dict:
+    """The loop's own step (``stepper.step``) after the first `n` of `cases` (their noise SDs already
+    set), with the run's config: what the loop would decide there.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        The cases in run order, with their noise SDs (``case_noise``).
+    n : int
+        How many of them the step has seen.
+    cfg : Mapping
+        The run's validated config (``converge``, ``surrogate``, ``ranges``, ``maps``, ``sweeps``,
+        ``study_rule`` and what ``PlannedCost`` reads).
+    previous : Mapping or None
+        The step before it (None: the first step).
+    fit, cost : optional
+        The map fit and the cost law to use (default: the config's, built anew).
+
+    Returns
+    -------
+    dict
+        The step record.
+    """
+    return step(cases, n, cfg["converge"], previous,
+                fit=fit if fit is not None else make_map_fit(cfg["surrogate"], final=True), ranges=cfg["ranges"],
+                maps_cfg=cfg["maps"], lds_seed=cfg["sweeps"]["lds"]["seed"], tolerance=cfg["study_rule"]["tolerance"],
+                floors=cfg["study_rule"].get("floors"), cost=cost if cost is not None else PlannedCost.from_config(cfg))
+
+
 def recheck_path(table: pd.DataFrame, cfg: Mapping, steps: Sequence[Mapping], noise_model: Mapping | None,
                  noise_calibration: list | None = None) -> list[dict]:
     """Every step of a run decided again with `noise_model` (see the module docstring).
@@ -81,7 +110,6 @@ def recheck_path(table: pd.DataFrame, cfg: Mapping, steps: Sequence[Mapping], no
     calibration = cfg["noise_calibration"] if noise_calibration is None else noise_calibration
     fit = make_map_fit(cfg["surrogate"], final=True)
     cost = PlannedCost.from_config(cfg)
-    lds_seed = cfg["sweeps"]["lds"]["seed"]
     out: list[dict] = []
     previous = None
     for published in steps:
@@ -96,9 +124,7 @@ def recheck_path(table: pd.DataFrame, cfg: Mapping, steps: Sequence[Mapping], no
             if list(previous["is_lds"][:int(previous["n"])]) != flags[:int(previous["n"])]:
                 raise ValueError(f"the step after {n} cases: its LDS flags differ from the step before it")
             previous = {**previous, "is_lds": flags}
-        record = step(cases, n, cfg["converge"], previous, fit=fit, ranges=cfg["ranges"], maps_cfg=cfg["maps"],
-                      lds_seed=lds_seed, tolerance=cfg["study_rule"]["tolerance"],
-                      floors=cfg["study_rule"].get("floors"), cost=cost)
+        record = redecide(cases, n, cfg, previous, fit=fit, cost=cost)
         out.append(record)
         previous = record
     return out

@@ -109,6 +109,7 @@ PUBLIC_API = [
     ("spreadmap.loop.model", "make_map_fit"),
     ("spreadmap.loop.loop_plot", "plot_converge_path"),
     ("spreadmap.loop.recheck", "path_rows"),
+    ("spreadmap.loop.recheck", "redecide"),
     ("spreadmap.loop.recheck", "recheck_path"),
     ("spreadmap.loop.recheck", "run_steps"),
     ("spreadmap.loop.stepper", "step"),
