@@ -165,7 +165,7 @@ ADHESIVE_VARIANT = "adhesive"
 PRESET_PREFIX = "default-"  # a `default` case's id; another density scale is a preset of its own (`default_density_scale_100-`)
 
 
-def adhesive_cases(docs: Path, pile_reserve: float = 4.7, surface_energy: float = 1e-4, material: dict | None = None,
+def adhesive_cases(docs: Path, *, pile_reserve: float, surface_energy: float, material: dict,
                    tables: dict | None = None) -> pd.DataFrame:
     """The published cases of the adhesive default scene, each case once (``pooled_cases``).
 
@@ -182,12 +182,12 @@ def adhesive_cases(docs: Path, pile_reserve: float = 4.7, surface_energy: float 
     ----------
     docs : pathlib.Path
         The repository's docs/ folder.
-    pile_reserve : float, optional
-        The scene's standing heap, ``scene.pile_reserve`` [h^2] (4.7 shipped).
-    surface_energy : float, optional
+    pile_reserve : float
+        The scene's standing heap, the config's ``scene.pile_reserve`` [h^2].
+    surface_energy : float
         The scene's ``material.surface_energy_j_m2`` [J/m^2].
-    material : dict or None, optional
-        The config's ``material`` (``density_kg_m3``, ``gravity_m_s2``); default SS 316L, 7980 and 9.81.
+    material : dict
+        The config's ``material`` (``density_kg_m3``, ``gravity_m_s2``).
     tables : dict or None, optional
         Paths that replace a table of `ADHESIVE_TABLES` (by its path under docs/), e.g. a
         benchmark's table before it is committed.
@@ -206,7 +206,6 @@ def adhesive_cases(docs: Path, pile_reserve: float = 4.7, surface_energy: float 
     """
     from ..case.powder import bond_number
 
-    material = {"density_kg_m3": 7980.0, "gravity_m_s2": 9.81, **(material or {})}
     tables = {k: Path(v) for k, v in (tables or {}).items()}
     picked = []
     for rel, source, arm, reserve in ADHESIVE_TABLES:

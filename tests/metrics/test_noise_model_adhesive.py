@@ -51,8 +51,18 @@ def heap_table(tmp_path):
     return path
 
 
+def shipped_scene(**changed) -> dict:
+    """The shipped config's scene as adhesive_cases takes it (pile reserve, surface energy, material)."""
+    from spreadmap import config as spreadmap_config
+
+    cfg = spreadmap_config.load(ROOT / "config.yaml")
+    scene = {"pile_reserve": cfg["scene"]["pile_reserve"], "surface_energy": cfg["material"]["surface_energy_j_m2"],
+             "material": cfg["material"]}
+    return {**scene, **changed}
+
+
 def test_the_adhesive_cells_are_the_shipped_scenes_cases_each_once(heap_table):
-    cases = adhesive_cases(DOCS, tables={"heap_size/cases.csv": heap_table})
+    cases = adhesive_cases(DOCS, **shipped_scene(), tables={"heap_size/cases.csv": heap_table})
     scaling = cases[cases["source"] == "adhesion_scaling+psd_cost"]
     # docs/adhesion's adh_x1000 arm (not dry, x100, x10, rolling or energy-matched), each published again
     # as docs/size_distribution's one_size arm: counted once, named by both
@@ -60,7 +70,7 @@ def test_the_adhesive_cells_are_the_shipped_scenes_cases_each_once(heap_table):
     heap = cases[cases["source"] == "heap_size"]
     assert sorted(zip(heap["d_um"], heap["seed"])) == [(20.0, s) for s in (1, 2, 3, 4, 5)] + [(40.0, s) for s in (1, 2, 3)]
     assert len(cases) == 14 and set(cases["variant"]) == {"adhesive"}
-    cells = adhesive_cells(DOCS, tables={"heap_size/cases.csv": heap_table})
+    cells = adhesive_cells(DOCS, **shipped_scene(), tables={"heap_size/cases.csv": heap_table})
     mfr = cells[cells["target"] == "mfr"].set_index("d_um")
     # usable cases only: d 20's flagged and failed seeds are out
     assert mfr["seeds"].to_dict() == {15.0: 2, 20.0: 3, 30.0: 2, 40.0: 3, 45.0: 2}
@@ -70,9 +80,9 @@ def test_the_adhesive_cells_are_the_shipped_scenes_cases_each_once(heap_table):
 
 
 def test_another_reserve_takes_only_the_tables_run_at_it(heap_table):
-    cases = adhesive_cases(DOCS, pile_reserve=3.0, tables={"heap_size/cases.csv": heap_table})
+    cases = adhesive_cases(DOCS, **shipped_scene(pile_reserve=3.0), tables={"heap_size/cases.csv": heap_table})
     assert list(cases["source"].unique()) == ["heap_size"] and len(cases) == 2 and (cases["d_um"] == 40.0).all()
-    assert adhesive_cells(DOCS, pile_reserve=9.4, tables={"heap_size/cases.csv": heap_table}).empty
+    assert adhesive_cells(DOCS, **shipped_scene(pile_reserve=9.4), tables={"heap_size/cases.csv": heap_table}).empty
 
 
 def test_a_table_whose_shipped_arm_is_not_the_scene_or_whose_twins_differ_is_refused(tmp_path, heap_table):
@@ -80,12 +90,13 @@ def test_a_table_whose_shipped_arm_is_not_the_scene_or_whose_twins_differ_is_ref
     bad.loc[bad.index[bad["arm"] == "adh_x1000"][0], "bond_number"] = 0.0  # a dry case under the adhesive arm
     bad.to_csv(tmp_path / "scaling.csv", index=False)
     with pytest.raises(ValueError, match="arm adh_x1000 holds cases not of the adhesive default scene"):
-        adhesive_cases(DOCS, tables={"adhesion/scaling_cases.csv": tmp_path / "scaling.csv", "heap_size/cases.csv": heap_table})
+        adhesive_cases(DOCS, **shipped_scene(), tables={"adhesion/scaling_cases.csv": tmp_path / "scaling.csv",
+                                                        "heap_size/cases.csv": heap_table})
     cost = pd.read_csv(DOCS / "size_distribution" / "cost_cases.csv")
     cost.loc[cost.index[cost["arm"] == "one_size"][0], "mfr"] += 0.01  # the same case reading otherwise
     cost.to_csv(tmp_path / "cost.csv", index=False)
     with pytest.raises(ValueError, match="reads differently in"):
-        adhesive_cases(DOCS, tables={"size_distribution/cost_cases.csv": tmp_path / "cost.csv",
+        adhesive_cases(DOCS, **shipped_scene(), tables={"size_distribution/cost_cases.csv": tmp_path / "cost.csv",
                                      "heap_size/cases.csv": heap_table})
 
 
@@ -165,14 +176,11 @@ def test_g_is_fitted_only_where_the_points_allow_leaving_one_out():
 def test_the_published_adhesive_law_recomputes_from_the_published_seed_repeats():
     """docs/noise/adhesive (tools/fit_noise_model.py --scene adhesive): its cells and its config block
     from the published tables and docs/noise's dry law, at the shipped config's scene."""
-    from spreadmap import config as spreadmap_config
     from spreadmap.noise_law.refit import config_entry
 
     published = json.loads((DOCS / "noise" / "adhesive" / "law.json").read_text())
     dry = json.loads((DOCS / "noise" / "law.json").read_text())["targets"]
-    cfg = spreadmap_config.load(ROOT / "config.yaml")
-    cells = adhesive_cells(DOCS, pile_reserve=cfg["scene"]["pile_reserve"],
-                           surface_energy=cfg["material"]["surface_energy_j_m2"], material=cfg["material"])
+    cells = adhesive_cells(DOCS, **shipped_scene())
     table = pd.read_csv(DOCS / "noise" / "adhesive" / "cells.csv")
     fit = table[table["role"] == "fit"]
     assert len(fit) == len(cells) and set(fit["point"]) == set(cells["point"])
