@@ -1,0 +1,59 @@
+"""README.md's numbers against the published tables under docs/ (issue 52): tools/readme_numbers.py
+on the committed tables, and the check's own rules (rounding, a wrong number, a lost phrase)."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+from conftest import ROOT
+
+from spreadmap.readme_numbers import CLAIMS, Claim, check, tolerance
+
+DOCS = ROOT / "docs"
+
+
+def test_every_readme_number_rounds_to_what_the_tables_give():
+    """The test of issue 52: a README number its tables do not give, or a phrase README lost, fails
+    here with the number, the derived one and its source."""
+    rows = check((ROOT / "README.md").read_text(), DOCS)
+    bad = [f"{r.status}: README {r.stated}, derived {r.derived:.5g} ({r.label}; {r.source})"
+           for r in rows if r.status != "ok"]
+    assert not bad, "\n".join(bad)
+    assert len(rows) >= 100  # every claim found, each with its numbers
+
+
+def test_the_tool_prints_the_check_and_exits_zero_on_the_committed_tables():
+    out = subprocess.run([sys.executable, "tools/readme_numbers.py"], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert out.stdout.strip().endswith("0 not matching or not found")
+    assert "docs/main_job/run_2026-12-04/cases.csv" in out.stdout
+
+
+def test_tolerance_is_half_a_unit_of_the_last_printed_digit():
+    assert tolerance("23") == pytest.approx(0.5)
+    assert tolerance("1.41") == pytest.approx(0.005)
+    assert tolerance("0.0096") == pytest.approx(0.00005)
+
+
+def test_a_wrong_number_is_a_mismatch_and_a_lost_phrase_not_found(tmp_path):
+    claim = Claim("cases", "ran {} cases, max / median {}", "cases.csv", lambda docs: [96, 22.74])
+    ok = check("The job ran 96\ncases, max / median 23.", tmp_path, [claim])
+    assert [r.status for r in ok] == ["ok", "ok"]
+    wrong = check("The job ran 96 cases, max / median 17.", tmp_path, [claim])
+    assert [r.status for r in wrong] == ["ok", "MISMATCH"]
+    assert wrong[1].stated == "17"
+    finer = check("The job ran 96 cases, max / median 22.7.", tmp_path, [claim])
+    assert [r.status for r in finer] == ["ok", "ok"]
+    finest = check("The job ran 96 cases, max / median 22.70.", tmp_path, [claim])  # 22.74 is not 22.70
+    assert finest[1].status == "MISMATCH"
+    assert check("The job ran many cases.", tmp_path, [claim])[0].status == "NOT FOUND"
+
+
+def test_the_main_jobs_max_over_median_is_read_from_its_cases():
+    """Issue 52's case: README's max / median of the main job of 2026-12-04 is its own cases' (615 s
+    over 27 s, docs/main_job/README.md), not the cost law's 17 over the box."""
+    claim = next(c for c in CLAIMS if "dry main job" in c.label and "over the box" in c.label)
+    values = [float(v) for v in claim.derive(DOCS)]
+    assert [round(v) for v in values[3:]] == [27, 615, 23]  # docs/main_job/README.md: 27 s, 615 s, 23
+    assert round(values[2]) == 17  # docs/case_cost/README.md: the box's max / median at `default`
