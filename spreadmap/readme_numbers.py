@@ -291,6 +291,12 @@ def _correction_study(docs: Path) -> list[float]:
     return [pp["h_over_d"].min(), pp["h_over_d"].max(), len(cases)]
 
 
+def _study(docs: Path) -> list[float]:
+    files = sorted((docs / "study").glob("cases_*.csv")) + sorted((docs / "study").glob("*_gap_seeds.csv"))
+    cases = pd.concat([_csv(f) for f in files]).drop_duplicates("case_id")
+    return [len(cases), cases["cpu_time"].sum() / 3600]
+
+
 def _stop(docs: Path, day: str) -> dict:
     return _json(_run(docs, day) / "stopped.json")
 
@@ -435,6 +441,8 @@ CLAIMS: list[Claim] = [
           "docs/case_cost/cost_map.json (shipped, default, this machine): median, max, max_over_median; "
           + MAIN_JOB + "cases.csv cpu_time median, max",
           _cost_map_default),
+    Claim("the published study: distinct cases, CPU hours", "the maps that converged ({} cases, {} CPU hours)",
+          "docs/study/cases_*.csv and *_gap_seeds.csv: distinct case_id, sum of cpu_time / 3600", _study),
     Claim("issue 31's benchmark: MFR shift's chi-square", "MFR reads higher (chi-square {} over {} points, p {})",
           "docs/case_cost/final_summary.md: issue31_start MFR chi-square line", _issue31_mfr),
 ]
