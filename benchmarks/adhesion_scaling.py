@@ -47,7 +47,7 @@ DEFAULT_ARMS = ["dry_x1000", "adh_x1000", "adh_x100", "adh_x10"]
 REFERENCE_ARM = "adh_x10"
 COLUMNS = ("arm", "point", "seed", "case_id", "f", "d_um", "h_um", "v_mm_s", "surface_energy", "density_scale",
            "bond_number", "status", "flagged", "flag_reason", "regime", "mfr", "pd", "mfr_sd", "pd_sd", "n_passed",
-           "layer_packing", "coverage", "thickness_ratio", "roughness_d", "flow_trend_z", "n_particles", "steps",
+           "layer_fill", "coverage", "thickness_ratio", "roughness_d", "flow_trend_z", "n_particles", "steps",
            "peak_overlap_ratio", "cpu_time", "wall_time")
 
 

@@ -68,17 +68,17 @@ def main(argv=None) -> int:
         rows.append(m)
     table = pd.DataFrame(rows)
     cols = ["case_id", "h_over_d", "status", "mfr_centres", "mfr", "n_passed", "mfr_sd", "mfr_sd_within",
-            "pd_to_blade", "pd", "n_pd", "pd_sd", "pd_cv", "layer_packing", "coverage", "roughness_d", "thickness_ratio",
+            "pd_to_blade", "pd", "n_pd", "pd_sd", "pd_cv", "layer_fill", "coverage", "roughness_d", "thickness_ratio",
             "regime_old", "regime", "metrics_s"]
     pd.set_option("display.width", 250)
     print(table[[c for c in cols if c in table]].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     ok = table[table["status"] == "ok"]
     if len(ok) > 2:
         print(f"PD / MFR: {np.min(ok['pd'] / ok['mfr']):.3f}-{np.max(ok['pd'] / ok['mfr']):.3f}; "
-              f"layer_packing x thickness_ratio / PD: "
-              f"{np.min(ok['layer_packing'] * ok['thickness_ratio'] / ok['pd']):.3f}-"
-              f"{np.max(ok['layer_packing'] * ok['thickness_ratio'] / ok['pd']):.3f}")
-        for col in ("layer_packing", "coverage", "roughness_d", "thickness_ratio", "pd"):
+              f"layer_fill x thickness_ratio / PD: "
+              f"{np.min(ok['layer_fill'] * ok['thickness_ratio'] / ok['pd']):.3f}-"
+              f"{np.max(ok['layer_fill'] * ok['thickness_ratio'] / ok['pd']):.3f}")
+        for col in ("layer_fill", "coverage", "roughness_d", "thickness_ratio", "pd"):
             r = np.corrcoef(ok["mfr"], ok[col])[0, 1]
             print(f"correlation with MFR across these cases: {col} r = {r:.2f}")
         ratio = ok["mfr_sd_within"] / ok["mfr_sd"]

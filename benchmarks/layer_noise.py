@@ -28,7 +28,7 @@ from spreadmap.metrics import measure
 
 ROOT = Path(__file__).resolve().parent.parent
 
-MEASURES = ("mfr", "pd", "layer_packing", "coverage", "roughness_d", "thickness_ratio")
+MEASURES = ("mfr", "pd", "layer_fill", "coverage", "roughness_d", "thickness_ratio")
 
 
 def point_of(path: Path, raw: dict) -> str:

@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from spreadmap.study.checksums import republish_if_listed, verified_bytes
+from spreadmap.targets import current_name
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -136,7 +137,7 @@ ARMS = {
     # issue's goal is stated against
     "issue31_start": {"rev": "dd28def", "overrides": {}},
 }
-CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_packing",
+CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_fill",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",
                 "peak_overlap_relax", "peak_overlap_move", "rolled_off_particles", "flow_trend", "flow_trend_z", "flagged",
                 "peak_overlap_free", "peak_overlap_wedged", "wedged",
@@ -572,8 +573,8 @@ def main(argv=None) -> int:
         with io.StringIO(resumed, newline="") as fh:
             for r in csv.DictReader(fh):
                 if r["status"] == "ok":
-                    published[(r["arm"], r["point"], int(r["seed"]))] = {
-                        k: (r[k] if k in ("arm", "point", "status", "regime", "case_dir") else
+                    published[(r["arm"], r["point"], int(r["seed"]))] = {  # a column's old name read as its name now
+                        current_name(k): (r[k] if k in ("arm", "point", "status", "regime", "case_dir") else
                             (r[k] == "True") if k in ("flagged", "wedged") else float(r[k]) if r[k] != "" else math.nan)
                         for k in r}
         print(f"{len(published)} finished cases taken from {args.resume_csv}", flush=True)

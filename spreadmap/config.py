@@ -13,6 +13,7 @@ import yaml
 # the schema, a section of it and a section checked alone live in spreadmap.schema (the ground
 # floor every module may read); this module validates a whole config, cross-keys included
 from .schema import SCHEMA, checked, section_schema  # noqa: F401  (re-exported)
+from .targets import RENAMED as RENAMED_TARGETS
 
 
 class ConfigError(ValueError):
@@ -162,13 +163,87 @@ def renamed_keys(config: dict) -> dict:
     return config
 
 
+# where a config names targets: (section, key) holding a list of target names, a mapping keyed by
+# them, or one name
+TARGET_PLACES = (("noise_calibration", "targets"), ("fidelity_correction", "targets"),
+                 ("converge", "map_error", "tolerance"), ("surrogate", "targets"), ("maps", "machine", "y"),
+                 ("decisions", "bounds"), ("decisions", "quality", "target"))
+
+
+def _target_places(config: dict):
+    """(where, holder, key) of every value of `config` that names targets (``TARGET_PLACES``;
+    each region of ``noise_calibration``)."""
+    for place in TARGET_PLACES:
+        holders = [(place[0], config.get(place[0]))]
+        if place[0] == "noise_calibration":
+            holders = [(f"noise_calibration[{i}]", region) for i, region in enumerate(holders[0][1] or [])]
+        for where, holder in holders:
+            for key in place[1:-1]:
+                holder = holder.get(key) if isinstance(holder, dict) else None
+                where += f".{key}"
+            if isinstance(holder, dict) and place[-1] in holder:
+                yield f"{where}.{place[-1]}", holder, place[-1]
+
+
+def renamed_targets(config: dict) -> dict:
+    """Read a target the config names by its old name (``spreadmap.targets.RENAMED``:
+    ``layer_packing`` -> ``layer_fill``) as its new one, in place, with one FutureWarning naming
+    where.
+
+    Called by ``validate``, so published configs (docs/*/config.yaml) that list ``layer_packing``
+    in ``noise_calibration`` targets keep validating.
+
+    Parameters
+    ----------
+    config : dict
+        A configuration as read from YAML: its lists of targets, its mappings keyed by them and
+        its single target names (``TARGET_PLACES``) are rewritten in place.
+
+    Returns
+    -------
+    dict
+        `config` itself, every old target name in it replaced by the new one.
+
+    Raises
+    ------
+    ConfigError
+        If a mapping keyed by targets holds a target under both its old and its new name.
+    """
+    found = []
+    for where, holder, key in _target_places(config):
+        value = holder[key]
+        if isinstance(value, str):
+            if value in RENAMED_TARGETS:
+                holder[key] = RENAMED_TARGETS[value]
+                found.append(where)
+        elif isinstance(value, list):
+            if any(v in RENAMED_TARGETS for v in value if isinstance(v, str)):
+                holder[key] = [RENAMED_TARGETS.get(v, v) if isinstance(v, str) else v for v in value]
+                found.append(where)
+        elif isinstance(value, dict):
+            for old, new in RENAMED_TARGETS.items():
+                if old not in value:
+                    continue
+                if new in value:
+                    raise ConfigError(f"config key '{where}' has both '{old}' and '{new}'; '{old}' is the old name "
+                                      f"of '{new}': keep '{new}' only")
+                value = holder[key] = {(new if k == old else k): v for k, v in value.items()}  # in its order
+                found.append(where)
+    if found:
+        names = ", ".join(f"'{old}' (now '{new}')" for old, new in RENAMED_TARGETS.items())
+        warnings.warn(f"config names a target by its old name {names} in {', '.join(found)}: read under its new "
+                      f"name; rename it there", FutureWarning, stacklevel=2)
+    return config
+
+
 def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
     """Validate `config` in place with Snakemake's validator (defaults filled), then the cross-key rules.
 
     A section under its old name (``RENAMED_SECTIONS``: ``convergence`` -> ``study_rule``) is
     first moved to its new one, and a key under its old name (``RENAMED_KEYS``:
     ``stability.max_flow_decline_z`` -> ``stability.max_flow_trend_z``) to its new one unless
-    that is given too, each with a warning. The schema (schemas/config.schema.yaml) fills every
+    that is given too, and a target under its old name (``renamed_targets``: ``layer_packing`` ->
+    ``layer_fill``) to its new one, each with a warning. The schema (schemas/config.schema.yaml) fills every
     default it has; the cross-key rules are the
     checks a schema cannot express (the presets named exist, ranges with min below max, noise
     calibration regions that are not empty, the noise model's sections, the pictures' points, the
@@ -197,6 +272,7 @@ def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
 
     renamed_sections(config)
     renamed_keys(config)
+    renamed_targets(config)
     try:
         snakemake_validate(config, str(schema_path), set_default=True)
     except WorkflowError:

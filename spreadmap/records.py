@@ -21,6 +21,8 @@ import os
 import sys
 from pathlib import Path
 
+from .targets import current_name
+
 RAW_FORMAT = "spreadmap-raw"
 
 
@@ -143,8 +145,10 @@ def read_table(path: Path | str):
     """A CSV table the workflow wrote (pandas `to_csv`), refused if damaged.
 
     Refused if it does not end with a line break or a row's field count differs from the
-    header's (a table cut off mid-row); else what pd.read_csv reads from it. A table cut exactly
-    at a line break has whole rows and passes: the atomic writer is what rules that out.
+    header's (a table cut off mid-row); else what pd.read_csv reads from it, its columns under
+    their names now (``current_columns``: a table written before a target was renamed reads as
+    one written after). A table cut exactly at a line break has whole rows and passes: the atomic
+    writer is what rules that out.
 
     Parameters
     ----------
@@ -154,7 +158,7 @@ def read_table(path: Path | str):
     Returns
     -------
     pandas.DataFrame
-        The table as ``pd.read_csv`` reads it.
+        The table as ``pd.read_csv`` reads it, old target names renamed (``current_columns``).
 
     Raises
     ------
@@ -181,7 +185,41 @@ def read_table(path: Path | str):
                                      "not read as data") from None
     import pandas as pd  # here: the YADE job's environment reads raw records without pandas
 
-    return pd.read_csv(io.StringIO(text))
+    return current_columns(pd.read_csv(io.StringIO(text)))
+
+
+def current_columns(table):
+    """A table with the columns of a renamed target under its name now (``targets.RENAMED``:
+    ``layer_packing`` and ``layer_packing_sd`` read as ``layer_fill`` and ``layer_fill_sd``).
+
+    The one place a table written under an old name (a published cases table, a metrics record of
+    an earlier run) is read as a current one; ``read_table`` and ``spreadmap.table.build_table``
+    call it, and so do the tools that read published tables. Quiet: the values are the same
+    measure, only the name changed.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        A table (not changed).
+
+    Returns
+    -------
+    pandas.DataFrame
+        `table` itself if no column has an old name; else a copy with each old column renamed, or,
+        where the new column is there too (records of both ages in one table), merged into it:
+        the new column's value, the old one's where the new one is missing.
+    """
+    renames = {c: current_name(c) for c in table.columns if current_name(c) != c}
+    if not renames:
+        return table
+    out = table.copy()
+    for old, new in renames.items():
+        if new in out.columns:
+            out[new] = out[new].combine_first(out[old])
+            out = out.drop(columns=old)
+        else:
+            out = out.rename(columns={old: new})
+    return out
 
 
 def quarantine(path: Path | str) -> Path:

@@ -10,11 +10,12 @@ import numpy as np
 import pandas as pd
 
 from .case.substrate import effective_gap_um
+from .design import NAMES
 from .files import atomic_path
 from .metrics import NEW_COLUMNS
-from .records import read_metrics
+from .records import current_columns, read_metrics
 
-FIRST_COLUMNS = ["case_id", "sweep", "index", "f", "d_um", "h_um", "v_mm_s", "preset", "seed", "status",
+FIRST_COLUMNS = ["case_id", "sweep", "index", *NAMES, "preset", "seed", "status",
                  "mfr", "pd", "regime", "flagged", "flag_reason", "reason"]
 # after every other column (added later than the rest): noise estimate and layer quality
 LAST_COLUMNS = list(NEW_COLUMNS)
@@ -144,7 +145,8 @@ def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFr
     pandas.DataFrame
         ``FIRST_COLUMNS`` first, the other columns of the records, then the noise and layer
         columns and (where the records name their floor) ``FLOOR_COLUMNS`` with the effective
-        gap. With no files: an empty table with ``FIRST_COLUMNS``.
+        gap; a target a record names by its old name under its name now
+        (``spreadmap.records.current_columns``). With no files: an empty table with ``FIRST_COLUMNS``.
 
     Raises
     ------
@@ -157,7 +159,7 @@ def build_table(metrics_files, benchmark_files, labels: list[dict]) -> pd.DataFr
         row.update(label)
         row.update(read_benchmark(bfile))
         rows.append(row)
-    table = pd.DataFrame(rows)
+    table = current_columns(pd.DataFrame(rows))  # a record of an earlier run may name a target by its old name
     if table.empty:
         return pd.DataFrame(columns=FIRST_COLUMNS)
     table = with_effective_gap(table)

@@ -73,7 +73,12 @@ def _register(*targets: Target) -> dict[str, Target]:
     return {t.name: t for t in targets}
 
 
-# The column keeps its name, `layer_packing`; its label says what it is (layer fill)
+# old target names -> their names now; the old name (and a column it starts, e.g. `<old>_sd`) is still
+# read: a table's columns by spreadmap.records.current_columns, a config's lists and keys by
+# spreadmap.config.renamed_targets (issue 52: the layer fill was called `layer_packing`, a name that
+# read as a bulk packing fraction while it reached 0.975)
+RENAMED: dict[str, str] = {"layer_packing": "layer_fill"}
+
 LAYER_FILL = ("layer fill = solid volume / volume between the floor (a rough floor's tops) and the layer's "
               "upper surface;\nnot a bulk packing fraction: a monolayer reads 0.80, spheres sunk in a rough "
               "floor's hollows up to 1,\nand it falls towards 0.74 (close packing) only as the layer grows many "
@@ -82,7 +87,7 @@ LAYER_FILL = ("layer fill = solid volume / volume between the floor (a rough flo
 REGISTRY: dict[str, Target] = _register(
     Target("mfr", "mass flow rate MFR", "MFR", "-", "mfr_sd", "n_passed", "base", "MFR"),
     Target("pd", "packing density PD", "PD", "-", "pd_sd", "n_pd", "base", "PD"),
-    Target("layer_packing", "layer fill: solid / volume under its surface", "layer fill", "-", "layer_packing_sd",
+    Target("layer_fill", "layer fill: solid / volume under its surface", "layer fill", "-", "layer_fill_sd",
            None, "layer", "layer fill", LAYER_FILL),
     Target("coverage", "floor coverage", "coverage", "-", "coverage_sd", None, "layer", "coverage"),
     Target("roughness_d", "surface roughness / d", "roughness/d", "-", "roughness_d_sd", None, "layer",
@@ -105,6 +110,27 @@ def get(name: str) -> Target:
         return REGISTRY[name]
     except KeyError:
         raise ValueError(f"no target {name!r} in spreadmap.targets.REGISTRY (registered: {list(REGISTRY)})") from None
+
+
+def current_name(name: str) -> str:
+    """The name now of a column or a target named under an old name (``RENAMED``).
+
+    Parameters
+    ----------
+    name : str
+        A column of a table or a target's name in a config, e.g. ``layer_packing`` or
+        ``layer_packing_sd``.
+
+    Returns
+    -------
+    str
+        `name` with an old target name at its start replaced by the new one (``layer_packing_sd``
+        -> ``layer_fill_sd``); any other name as it is.
+    """
+    for old, new in RENAMED.items():
+        if name == old or name.startswith(old + "_"):
+            return new + name[len(old):]
+    return name
 
 
 def sd_columns() -> tuple[str, ...]:

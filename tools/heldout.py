@@ -23,17 +23,20 @@ from pathlib import Path
 import pandas as pd
 
 from spreadmap import config as spreadmap_config
+from spreadmap.records import current_columns
 from spreadmap.surrogate import heldout_points
 from spreadmap.surrogate.cli import predict_logged, write_csv
 from spreadmap.surrogate.saved_model import ModelFileError, load_model
+from spreadmap.targets import current_name
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def read_csv(path: str) -> pd.DataFrame:
+    """A table, a target's columns under its name now (a published table may name it by its old one)."""
     if not Path(path).is_file():
         raise ValueError(f"file not found: {path}")
-    return pd.read_csv(path)
+    return current_columns(pd.read_csv(path))
 
 
 def choose(args) -> int:
@@ -54,7 +57,7 @@ def score(args) -> int:
     runs = heldout_points.match_runs(points, read_csv(args.table))
     predictions = read_csv(args.predictions)
     tables, summaries = [], []
-    for target in args.targets:
+    for target in map(current_name, args.targets):  # an old target name: the tables read it under its new one
         table, summary = heldout_points.score(predictions, runs, target, args.level)
         tables.append(table.assign(target=target).rename(columns={target: "predicted"}))
         summaries.append(summary)

@@ -20,9 +20,9 @@ from .sizes import size_measures
 PHASES = ("settle", "relax", "move")  # the phases of the scene, in order (yade_scripts/spreading_case.py)
 
 # columns added by the layer / precision work (issues 13, 14), after every older column
-NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_packing", "coverage",
+NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_fill", "coverage",
                "roughness_d", "thickness_ratio", "flow_trend", "flow_trend_z", "peak_overlap_free",
-               "peak_overlap_wedged", "wedged", "layer_packing_sd", "coverage_sd", "roughness_d_sd",
+               "peak_overlap_wedged", "wedged", "layer_fill_sd", "coverage_sd", "roughness_d_sd",
                "thickness_ratio_sd",
                # the heap ahead of the blade at the window's start and end, in h^2 (issue 32)
                "heap_start_h2", "heap_end_h2",
@@ -107,7 +107,7 @@ def measure(raw: dict, settings: dict) -> dict:
                                                    settings["within_batches"])[0]
     layer = layer_quality(s2["positions"], s2["radii"], x0, x1, width, settings["surface_grid_d"] * d,
                           block=settings.get("layer_block_d", LAYER_BLOCK_D) * d)
-    out["layer_packing"], out["layer_packing_sd"] = layer["layer_packing"], layer["layer_packing_sd"]
+    out["layer_fill"], out["layer_fill_sd"] = layer["layer_fill"], layer["layer_fill_sd"]
     out["coverage"], out["coverage_sd"] = layer["coverage"], layer["coverage_sd"]
     out["roughness_d"], out["roughness_d_sd"] = layer["roughness"] / d, layer["roughness_sd"] / d
     out["thickness_ratio"], out["thickness_ratio_sd"] = layer["thickness"] / gap, layer["thickness_sd"] / gap

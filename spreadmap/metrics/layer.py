@@ -18,15 +18,15 @@ and s = 0 (the bare floor) where no sphere lies above the point. Why this one:
   length), and it is exact at every grid point;
 - all solid above z = 0 lies below it, so the layer's solid volume is exact (sphere/box
   volumes, spreadmap.metrics.geometry), and the measures decompose the study's box fraction exactly when
-  the layer is below the gap: solid / (A h) = layer_packing x thickness_ratio.
+  the layer is below the gap: solid / (A h) = layer_fill x thickness_ratio.
 What it means: voids under a sphere's overhang count as layer, bare floor does not. A single
 layer of spheres resting on the floor whose shadows do not overlap (square or hexagonal
-monolayer, a lone sphere) has layer_packing 4/5: solid (4/3) pi R^3 over the volume under its
+monolayer, a lone sphere) has layer_fill 4/5: solid (4/3) pi R^3 over the volume under its
 dome, (5/3) pi R^3. Its gaps are in the coverage (pi/4 for a square monolayer of touching
 spheres), not in the packing. A thick bed tends to its bulk packing.
 
 Quantities (the mean runs over the floor area of the region, bare floor included)
-- layer_packing = solid volume in the region / integral of s  (NaN without any powder),
+- layer_fill = solid volume in the region / integral of s  (NaN without any powder),
 - coverage      = share of the floor area with s > 0,
 - roughness     = SD of s,
 - thickness     = mean of s.
@@ -89,14 +89,14 @@ def upper_envelope(positions, radii, xs: np.ndarray, ys: np.ndarray) -> np.ndarr
 
 
 def _measures(cells: float, s_sum: float, s2_sum: float, covered: float, solid: float, cell_area: float) -> np.ndarray:
-    """(layer_packing, coverage, roughness, thickness) from a region's sums over its grid cells."""
+    """(layer_fill, coverage, roughness, thickness) from a region's sums over its grid cells."""
     mean = s_sum / cells
     packing = solid / (s_sum * cell_area) if s_sum > 0 else math.nan
     return np.array([packing, covered / cells, math.sqrt(max(s2_sum / cells - mean * mean, 0.0)), mean])
 
 
 def block_standard_errors(sums: np.ndarray, cell_area: float) -> np.ndarray:
-    """Delete-one-block jackknife SEs of (layer_packing, coverage, roughness, thickness) from the
+    """Delete-one-block jackknife SEs of (layer_fill, coverage, roughness, thickness) from the
     blocks' sums (B, 5: cells, sum s, sum s^2, cells with s > 0, solid volume); NaN if B < 2."""
     sums = np.asarray(sums, float)
     b = len(sums)
@@ -110,7 +110,7 @@ def block_standard_errors(sums: np.ndarray, cell_area: float) -> np.ndarray:
 def layer_quality(positions, radii, x0: float, x1: float, width: float, spacing: float,
                   block: float | None = None) -> dict:
     """Layer measures over [x0, x1] x [0, width] above z = 0 (SI units, see the module docstring):
-    layer_packing, coverage, roughness (SD of s), thickness (mean of s), solid_volume, area; with
+    layer_fill, coverage, roughness (SD of s), thickness (mean of s), solid_volume, area; with
     `block` (a length), also each measure's block-jackknife standard error (`<measure>_sd`) and
     the number of blocks (`blocks`)."""
     positions = np.asarray(positions, float).reshape(-1, 3)
@@ -124,7 +124,7 @@ def layer_quality(positions, radii, x0: float, x1: float, width: float, spacing:
     solid = float(np.sum(sphere_box_volume(pos, rad, (x0, 0.0, 0.0), (x1, width, top)))) if len(pos) else 0.0
     thickness = float(np.mean(s))
     out = {
-        "layer_packing": solid / (thickness * area) if thickness > 0 else math.nan,
+        "layer_fill": solid / (thickness * area) if thickness > 0 else math.nan,
         "coverage": float(np.mean(s > 0.0)),
         "roughness": float(np.std(s)),
         "thickness": thickness,
@@ -137,7 +137,7 @@ def layer_quality(positions, radii, x0: float, x1: float, width: float, spacing:
         n_blocks = int((x1 - x0) // block)
         sums = block_sums(s, xs, pos, rad, x0, x1, width, top, n_blocks) if n_blocks >= 2 else np.zeros((0, 5))
         se = block_standard_errors(sums, area / s.size)
-        out.update({f"{name}_sd": float(v) for name, v in zip(("layer_packing", "coverage", "roughness", "thickness"), se)})
+        out.update({f"{name}_sd": float(v) for name, v in zip(("layer_fill", "coverage", "roughness", "thickness"), se)})
         out["blocks"] = n_blocks
     return out
 

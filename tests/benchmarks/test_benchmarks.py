@@ -154,7 +154,7 @@ def test_layer_metrics_on_a_constructed_record(tmp_path):
     assert r.returncode == 0, (r.stdout + r.stderr)[-4000:]
     out = pd.read_csv(tmp_path / "out.csv")
     assert np.allclose(out["mfr"], np.pi / 6) and np.allclose(out["mfr_centres"], np.pi / 6)
-    assert "layer_packing x thickness_ratio / PD: 1.00" in r.stdout and (out["regime"] == "normal").all()
+    assert "layer_fill x thickness_ratio / PD: 1.00" in r.stdout and (out["regime"] == "normal").all()
 
 
 def test_schedule_order_prints_the_known_makespans(tmp_path):
@@ -201,7 +201,7 @@ def test_layer_noise_pools_the_seed_spread_within_points(tmp_path):
     out = pd.read_csv(tmp_path / "out.csv").set_index("measure")
     settings = spreadmap_config.load(ROOT / "config.yaml")["metrics"]
     rows = pd.DataFrame([{"point": p.parent.name[0], **measure(json.loads(p.read_text()), settings)} for p in paths])
-    for m in ("roughness_d", "thickness_ratio", "layer_packing"):  # (the bottom layer covers the floor: coverage 1)
+    for m in ("roughness_d", "thickness_ratio", "layer_fill"):  # (the bottom layer covers the floor: coverage 1)
         ss = sum(((g - g.mean()) ** 2).sum() for _, g in rows.groupby("point")[m])
         assert out.loc[m, "dof"] == 4
         assert out.loc[m, "seed_sd"] == pytest.approx(np.sqrt(ss / 4), rel=1e-9) and out.loc[m, "seed_sd"] > 0

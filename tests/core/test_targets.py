@@ -45,7 +45,7 @@ def test_registry_fields_and_refusals():
     assert targets.names("base") == ("mfr", "pd")
     assert targets.axis_label("mfr") == "mass flow rate MFR [-]" and targets.short("roughness_d") == "roughness/d"
     assert targets.axis_label("not_a_target") == "not_a_target" and targets.definition("pd") is None
-    assert targets.get("layer_packing").definition.startswith("layer fill")
+    assert targets.get("layer_fill").definition.startswith("layer fill")
     with pytest.raises(ValueError, match="no target 'x'.*registered"):
         targets.get("x")
     with pytest.raises(ValueError, match="kind 'bulk'"):

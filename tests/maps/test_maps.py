@@ -206,14 +206,14 @@ def test_regime_overlay_needs_the_targets_of_the_rule(model, cases, tmp_path):
 def test_machine_y_is_the_layer_measure_with_most_beyond_mfr():
     rng = np.random.default_rng(1)
     df = syn.table(40, 0.07)
-    df["layer_packing"] = 0.9 * df["mfr"] + rng.normal(0, 0.005, 40)      # MFR again
+    df["layer_fill"] = 0.9 * df["mfr"] + rng.normal(0, 0.005, 40)      # MFR again
     df["coverage"] = rng.uniform(0.6, 1.0, 40)                             # something else
-    y, scores = maps.choose_machine_y(df, ["mfr", "pd", "layer_packing", "coverage"])
-    assert y == "coverage" and list(scores["target"]) == ["layer_packing", "coverage", "pd"]
+    y, scores = maps.choose_machine_y(df, ["mfr", "pd", "layer_fill", "coverage"])
+    assert y == "coverage" and list(scores["target"]) == ["layer_fill", "coverage", "pd"]
     # the reported correlation with MFR is scipy's Pearson r, recomputed here with numpy
     r = scores.set_index("target")["r_with_mfr"]
-    assert r["layer_packing"] == pytest.approx(np.corrcoef(df["mfr"], df["layer_packing"])[0, 1], abs=1e-12)
-    assert r["layer_packing"] > 0.9 and abs(r["coverage"]) < 0.4
+    assert r["layer_fill"] == pytest.approx(np.corrcoef(df["mfr"], df["layer_fill"])[0, 1], abs=1e-12)
+    assert r["layer_fill"] > 0.9 and abs(r["coverage"]) < 0.4
     low, high = scores.set_index("target").loc["coverage", ["r_low", "r_high"]]
     assert low < r["coverage"] < high
     assert maps.choose_machine_y(df, ["mfr", "pd"])[0] == "pd"

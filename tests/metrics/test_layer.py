@@ -40,7 +40,7 @@ def hand(cell_area, per_cell_spheres=1, extra_height=0.0):
     mean = int_s / cell_area
     return {"coverage": math.pi * R ** 2 / cell_area, "thickness": mean,
             "roughness": math.sqrt(int_s2 / cell_area - mean ** 2),
-            "layer_packing": per_cell_spheres * 4 / 3 * math.pi * R ** 3 / int_s}
+            "layer_fill": per_cell_spheres * 4 / 3 * math.pi * R ** 3 / int_s}
 
 
 def check(got, expected, rel=GRID_REL):
@@ -50,7 +50,7 @@ def check(got, expected, rel=GRID_REL):
 
 def test_hand_formula_matches_the_quoted_integrals():
     h = hand(D * D)  # one sphere per d x d cell: the quoted 5/3, 17/6 integrals
-    assert h["layer_packing"] == pytest.approx(0.8, rel=1e-15)
+    assert h["layer_fill"] == pytest.approx(0.8, rel=1e-15)
     assert h["thickness"] == pytest.approx(5 * math.pi / 24, rel=1e-15)
     assert h["roughness"] ** 2 == pytest.approx(17 * math.pi / 96 - 25 * math.pi ** 2 / 576, rel=1e-13)
 
@@ -58,7 +58,7 @@ def test_hand_formula_matches_the_quoted_integrals():
 def test_square_monolayer_of_touching_spheres():
     """Coverage pi/4, packing 4/5, thickness 5 pi d / 24, roughness sqrt(17 pi/96 - 25 pi^2/576) d."""
     got = layer_quality(lattice(10, 4), R, 0.0, 10 * D, 4 * D, SPACING)
-    check(got, {"coverage": math.pi / 4, "layer_packing": 0.8, "thickness": 5 * math.pi / 24 * D,
+    check(got, {"coverage": math.pi / 4, "layer_fill": 0.8, "thickness": 5 * math.pi / 24 * D,
                 "roughness": math.sqrt(17 * math.pi / 96 - 25 * math.pi ** 2 / 576) * D})
     assert got["solid_volume"] == pytest.approx(40 * 4 / 3 * math.pi * R ** 3, rel=1e-13)  # exact, not gridded
 
@@ -74,7 +74,7 @@ def test_two_layers_simple_cubic():
     """The envelope is the top layer's domes at height 2R above the first: packing 8/11."""
     got = layer_quality(lattice(10, 4, layers=2), R, 0.0, 10 * D, 4 * D, SPACING)
     expected = hand(D * D, per_cell_spheres=2, extra_height=D)
-    assert expected["layer_packing"] == pytest.approx(8 / 11, rel=1e-15)
+    assert expected["layer_fill"] == pytest.approx(8 / 11, rel=1e-15)
     check(got, expected)
 
 
@@ -110,7 +110,7 @@ def test_single_row_of_spheres():
     pi/16, thickness 5 pi d/96, roughness sqrt(17 pi/384 - (5 pi/96)^2) d, packing 4/5."""
     pos = np.array([((i + 0.5) * D, 2.0 * D, R) for i in range(10)])
     got = layer_quality(pos, R, 0.0, 10 * D, 4 * D, SPACING)
-    expected = {"coverage": math.pi / 16, "thickness": 5 * math.pi / 96 * D, "layer_packing": 0.8,
+    expected = {"coverage": math.pi / 16, "thickness": 5 * math.pi / 96 * D, "layer_fill": 0.8,
                 "roughness": math.sqrt(17 * math.pi / 384 - (5 * math.pi / 96) ** 2) * D}
     check(got, expected)
     check(hand(4 * D * D), expected, rel=1e-13)  # the two hand routes agree
@@ -121,15 +121,15 @@ def test_hemisphere_sunk_in_the_substrate_fills_its_dome():
     z = 0 is (2/3) pi R^3, exactly the volume under its dome: packing 1."""
     got = layer_quality([[2.0, 2.0, 0.0]], R, 0.0, 4 * D, 4 * D, SPACING)
     assert got["solid_volume"] == pytest.approx(2 / 3 * math.pi * R ** 3, rel=1e-13)
-    assert got["layer_packing"] == pytest.approx(1.0, rel=GRID_REL)
+    assert got["layer_fill"] == pytest.approx(1.0, rel=GRID_REL)
 
 
 def test_empty_region_and_spheres_outside_it():
     got = layer_quality([[20.0, 2.0, R], [-3.0, 1.0, R]], R, 0.0, 10 * D, 4 * D, SPACING)
     assert got["coverage"] == 0.0 and got["thickness"] == 0.0 and got["roughness"] == 0.0
-    assert math.isnan(got["layer_packing"]) and got["solid_volume"] == 0.0
+    assert math.isnan(got["layer_fill"]) and got["solid_volume"] == 0.0
     empty = layer_quality(np.zeros((0, 3)), R, 0.0, 10 * D, 4 * D, SPACING)
-    assert empty["coverage"] == 0.0 and math.isnan(empty["layer_packing"])
+    assert empty["coverage"] == 0.0 and math.isnan(empty["layer_fill"])
 
 
 def test_grid_is_refused_when_degenerate():
@@ -161,7 +161,7 @@ def test_random_deposit_against_monte_carlo():
     length, width = 8.0 * D, 4.0 * D
     pos = random_deposit(45, length, width, rng)
     got = layer_quality(pos, R, 0.0, length, width, SPACING)
-    assert 0.3 < got["coverage"] < 0.95 and 0.3 < got["layer_packing"] < 0.8  # a non-trivial layer
+    assert 0.3 < got["coverage"] < 0.95 and 0.3 < got["layer_fill"] < 0.8  # a non-trivial layer
     n = 300_000
     top = pos[:, 2].max() + R
     p = rng.uniform((0, 0, 0), (length, width, top), size=(n, 3))
@@ -178,7 +178,7 @@ def test_random_deposit_against_monte_carlo():
     q = below.mean()  # share of the box under the surface = mean thickness / box height
     assert abs(got["thickness"] / top - q) < 4 * se(q, n) + 1e-3
     q = solid.sum() / below.sum()
-    assert abs(got["layer_packing"] - q) < 4 * se(q, below.sum()) + 1e-3
+    assert abs(got["layer_fill"] - q) < 4 * se(q, below.sum()) + 1e-3
     # mean of s^2 from the same floor points: roughness
     mean, mean2 = s.mean(), (s ** 2).mean()
     sd_mc = math.sqrt(mean2 - mean ** 2)
@@ -193,7 +193,7 @@ def test_envelope_takes_the_highest_sphere():
 
 # The layer measures' noise: block jackknife standard errors (layer_quality(..., block=...))
 
-MEASURES = ("layer_packing", "coverage", "roughness", "thickness")
+MEASURES = ("layer_fill", "coverage", "roughness", "thickness")
 
 
 def test_block_errors_match_the_spread_over_independent_deposits():
@@ -279,10 +279,10 @@ def test_close_packed_layers_against_the_known_packing_fraction():
         got[n] = layer_quality(centres, R, 0.0, 4 * D, width, SPACING)
     # one close-packed layer: coverage pi / (2 sqrt 3), fill 4/5 (its shadows touch, never overlap)
     assert got[1]["coverage"] == pytest.approx(math.pi / (2.0 * math.sqrt(3.0)), rel=GRID_REL)
-    assert got[1]["layer_packing"] == pytest.approx(0.8, rel=GRID_REL)
+    assert got[1]["layer_fill"] == pytest.approx(0.8, rel=GRID_REL)
     added_solid = got[6]["solid_volume"] - got[4]["solid_volume"]
     added_volume = (got[6]["thickness"] - got[4]["thickness"]) * got[6]["area"]
     # 16 spheres a layer: the area 4 d x 2 sqrt(3) d at 2 / (sqrt(3) d^2) spheres per area
     assert added_solid == pytest.approx(2 * 16 * (4 / 3) * math.pi * R ** 3, rel=1e-9)
     assert added_solid / added_volume == pytest.approx(fcc, rel=GRID_REL)
-    assert 0.8 > got[4]["layer_packing"] > got[6]["layer_packing"] > fcc
+    assert 0.8 > got[4]["layer_fill"] > got[6]["layer_fill"] > fcc

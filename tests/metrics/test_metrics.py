@@ -286,7 +286,7 @@ def test_case_metrics_of_a_clean_two_layer_case():
     assert m["mfr_sd"] == pytest.approx(0.45 / math.sqrt(80) * math.pi / 6, rel=1e-12)
     assert m["pd_sd"] == pytest.approx(0.45 / math.sqrt(72) * math.pi / 6, rel=1e-12)
     assert m["coverage"] == pytest.approx(math.pi / 4, rel=2e-3)
-    assert m["layer_packing"] == pytest.approx(8 / 11, rel=2e-3)
+    assert m["layer_fill"] == pytest.approx(8 / 11, rel=2e-3)
     assert m["thickness_ratio"] == pytest.approx(11 * math.pi / 24 / 2, rel=2e-3)
     assert math.isnan(m["mfr_sd_within"])  # no behind_series in this record
     assert list(m)[-len(NEW_COLUMNS + SIZE_COLUMNS):] == list(NEW_COLUMNS + SIZE_COLUMNS)  # the new columns come last

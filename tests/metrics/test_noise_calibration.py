@@ -10,6 +10,7 @@ from scipy import stats
 
 from spreadmap import targets
 from spreadmap.metrics.noise import calibrated_noise, calibration_factors
+from spreadmap.records import read_table
 
 STUDY = ROOT / "docs" / "study"
 
@@ -48,8 +49,8 @@ def test_a_region_has_bounds_either_side_and_may_name_its_targets():
 def seed_repeats(name: str) -> pd.DataFrame:
     """The published seed repeats `name` (seeds 2-4 of 8 LDS points) beside each point's seed-1 case
     of the sweep or the loop."""
-    repeats = pd.read_csv(STUDY / name)
-    firsts = pd.concat([pd.read_csv(STUDY / "cases_lds.csv"), pd.read_csv(STUDY / "cases_converge.csv")])
+    repeats = read_table(STUDY / name)  # published under the layer fill's old name: read under its new one
+    firsts = pd.concat([read_table(STUDY / "cases_lds.csv"), read_table(STUDY / "cases_converge.csv")])
     point = lambda ids: ids.str.replace(r"-s\d+$", "", regex=True)  # noqa: E731
     repeats["point"], firsts["point"] = point(repeats["case_id"]), point(firsts["case_id"])
     firsts = firsts[(firsts["seed"] == 1) & firsts["point"].isin(set(repeats["point"]))].drop_duplicates("case_id")

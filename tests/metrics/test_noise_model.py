@@ -133,7 +133,7 @@ def results_table() -> pd.DataFrame:
 
 def test_the_law_sets_each_case_noise_sd_of_mfr_and_pd_and_the_bands_the_layer_measures():
     table = results_table()
-    bands = [{"h_over_d_below": 2.0, "factor": 1.37, "targets": ["layer_packing", "coverage", "roughness_d", "thickness_ratio"]}]
+    bands = [{"h_over_d_below": 2.0, "factor": 1.37, "targets": ["layer_fill", "coverage", "roughness_d", "thickness_ratio"]}]
     out = case_noise(table, NOISE_MODEL, bands)
     m, p = NOISE_MODEL["mfr"], NOISE_MODEL["pd"]
     np.testing.assert_allclose(out["mfr_sd"][:2], [0.3 * 0.03 * (1.2 / 2) ** -0.8, 0.5 * 0.03 * 2 ** -0.4 * 1.5 ** -0.8])
