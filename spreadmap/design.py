@@ -207,18 +207,22 @@ class Design:
 
 
 def h_over_d(points) -> np.ndarray:
-    """The gap-to-diameter ratio h/d [-] of design points.
+    """The gap-to-diameter ratio h/d [-] of design points: the one place it is computed.
 
     Parameters
     ----------
-    points : pandas.DataFrame or mapping
-        Anything with ``h_um`` and ``d_um`` columns (or keys), both in um.
+    points : pandas.DataFrame, mapping or numpy.ndarray
+        Anything with ``h_um`` and ``d_um`` columns (or keys), both in um; or an array of points
+        whose last axis holds the parameters in ``NAMES`` order, shape (n, 4) or (4,).
 
     Returns
     -------
     numpy.ndarray
-        h_um / d_um, as floats.
+        h_um / d_um, as floats (shape (n,), or () for one point).
     """
+    if isinstance(points, np.ndarray):
+        points = np.asarray(points, float)
+        return points[..., NAMES.index("h_um")] / points[..., NAMES.index("d_um")]
     return np.asarray(points["h_um"], float) / np.asarray(points["d_um"], float)
 
 

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from . import design
 from .run_report import set_summary
 
 NUMBER = r"([-+]?\d+(?:\.\d+)?)"
@@ -107,7 +108,7 @@ def _chi2_upper(rmse: float, n: int) -> float:
 
 def _cpu_share_of_corner_cases(docs: Path) -> list[float]:
     c = _csv(_run(docs, "2026-12-04") / "cases.csv")
-    corner = (c["d_um"] <= 12.5) & (c["h_um"] / c["d_um"] >= 5.5)
+    corner = (c["d_um"] <= 12.5) & (design.h_over_d(c) >= 5.5)
     return [100 * c.loc[corner, "cpu_time"].sum() / c["cpu_time"].sum()]
 
 
@@ -177,7 +178,7 @@ def _heap_size(docs: Path) -> list[float]:
 
     def h_over_d(point):
         p = rough[rough["point"] == point].iloc[0]
-        return p["h_um"] / p["d_um"]
+        return float(design.h_over_d(p))
 
     return [cpu["wide", 3.0] / cpu["wide", 4.7], h_over_d("wide"), cpu["corner", 3.0] / cpu["corner", 4.7],
             h_over_d("corner"), corner.mean()[3.0] - corner.mean()[4.7], math.hypot(se[3.0], se[4.7]),

@@ -50,6 +50,7 @@ from matplotlib.collections import PatchCollection  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Circle, Patch, Rectangle  # noqa: E402
 
+from spreadmap.design import h_over_d  # noqa: E402
 from spreadmap.figures import save_figure  # noqa: E402
 
 __all__ = ["plot_case_views", "build_case_figure", "choose_moments", "sphere_table", "view_window",
@@ -371,7 +372,7 @@ def build_case_figure(raw: dict, colour_by: str = "speed"):
     sub_rad = np.asarray(substrate.get("radii") or [], float) * UM
     title = (f"Powder spreading, case {cv['case_id']}\n"
              f"f = {_fmt_num(pt.get('f'))},  d = {_fmt_num(pt.get('d_um'))} µm,  h = {_fmt_num(pt.get('h_um'))} µm"
-             + (f" (h/d = {pt['h_um'] / pt['d_um']:.2f})" if pt.get("h_um") and pt.get("d_um") else "")
+             + (f" (h/d = {float(h_over_d(pt)):.2f})" if pt.get("h_um") and pt.get("d_um") else "")
              + f",  v = {_fmt_num(pt.get('v_mm_s'))} mm/s")
     n_sph = raw.get("n_particles") or (len(snapshots[moments[0]].get("positions", [])) if moments else 0)
     status = raw.get("status")

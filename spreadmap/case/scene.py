@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+from ..design import NAMES
 from . import psd
 
 # Densest sphere packing: no solid fraction can exceed it.
@@ -130,7 +131,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     KeyError
         If ``preset_name`` is not a preset of the config.
     """
-    for key in ("f", "d_um", "h_um", "v_mm_s"):
+    for key in NAMES:
         value = point[key]
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise ValueError(f"case {case_id}: parameter {key} = {value!r} must be a positive number")
@@ -217,7 +218,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     surface_energy = float(material.get("surface_energy_j_m2", 0.0))  # 0: dry (configs before adhesion)
     return {
         "case_id": case_id,
-        "point": {k: float(point[k]) for k in ("f", "d_um", "h_um", "v_mm_s")},
+        "point": {k: float(point[k]) for k in NAMES},
         "friction": float(point["f"]),
         "diameter": d,
         "gap": h,

@@ -22,6 +22,7 @@ import numpy as np
 from ..case.identity import case_scene
 from ..case.launcher import run_case
 from ..case.render import render
+from ..design import NAMES
 from ..files import write_text_atomically
 from ..metrics.case import case_metrics
 
@@ -67,7 +68,7 @@ def run_arm_case(cfg: dict, preset: str, point: dict, seed: int, keep: Path | st
     script = folder / "case.py"
     write_text_atomically(script, render(params))
     result = run_case(script, folder / "raw.json", folder / "run.log", params["timeout_s"])
-    row = {"case_id": cid, "seed": seed, **{k: point[k] for k in ("f", "d_um", "h_um", "v_mm_s")},
+    row = {"case_id": cid, "seed": seed, **{k: point[k] for k in NAMES},
            "cpu_time": result["cpu_time"], "wall_time": result["wall_time"]}
     raw_path = folder / "raw.json"
     if raw_path.exists():

@@ -36,7 +36,7 @@ import pandas as pd
 
 from .. import targets as registry
 from ..case.scene import precision_target
-from ..design import NAMES, Design
+from ..design import NAMES, Design, h_over_d
 from ..loop import map_criteria
 from ..loop.cost import PlannedCost
 from ..loop.model import make_map_fit
@@ -52,7 +52,7 @@ def passed_spheres(X: np.ndarray, mfr: np.ndarray, preset: Mapping, config: Mapp
     at least the spheres of its shortest window and at most those of its longest
     (MFR x h/d x width x window x 6/pi)."""
     X = np.asarray(X, float)
-    hd = X[:, 2] / X[:, 1]
+    hd = h_over_d(X)
     per_d = np.asarray(mfr, float) * hd * float(preset["width_d"]) * 6.0 / math.pi
     lo = per_d * float(preset["window_d"])
     target = precision_target(preset, config)

@@ -31,7 +31,7 @@ import pandas as pd
 from scipy import stats
 
 from .. import targets as registry
-from ..design import h_over_d
+from ..design import NAMES, h_over_d
 from ..table import usable_cases as usable
 
 TARGETS = registry.names("base")  # mfr, pd
@@ -60,11 +60,11 @@ def pairs(table: pd.DataFrame, preset: str, reference: str, targets=TARGETS) -> 
         ``cpu_preset`` and ``cpu_ref`` [s] and per target ``<t>_preset``, ``<t>_ref``, ``<t>_l``
         (ln(reference / preset)) and ``<t>_v`` (its noise variance).
     """
-    keep = ["name", "seed", "f", "d_um", "h_um", "v_mm_s", "cpu_time"] + [c for t in targets for c in (t, f"{t}_sd")]
+    keep = ["name", "seed", *NAMES, "cpu_time"] + [c for t in targets for c in (t, f"{t}_sd")]
     a = usable(table[table["preset"] == preset])[keep]
     b = usable(table[table["preset"] == reference])[["name", "seed", "cpu_time"] + [c for t in targets for c in (t, f"{t}_sd")]]
     both = a.merge(b, on=["name", "seed"], suffixes=("_preset", "_ref"))
-    out = both[["name", "seed", "f", "d_um", "h_um", "v_mm_s"]].copy()
+    out = both[["name", "seed", *NAMES]].copy()
     out["h_over_d"] = h_over_d(out)
     out["cpu_preset"], out["cpu_ref"] = both["cpu_time_preset"], both["cpu_time_ref"]
     for t in targets:

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import copy
 
+from ..design import NAMES
+
 # The keys of a preset the knob sweeps may turn.
 KNOBS = ("width_d", "heap_height_d", "pile_length_min_d", "heap_reserve", "transient_d", "window_d",
          "dt_factor", "density_scale", "target_cv")
@@ -87,7 +89,7 @@ def check(config: dict) -> list[str]:
             problems.append(f"config key 'fidelity.presets': value {name!r} is not allowed; "
                             f"it must be one of the presets defined: {sorted(presets)}")
     for name, point in fid["points"].items():
-        extra = sorted(set(point) - {"f", "d_um", "h_um", "v_mm_s"})
+        extra = sorted(set(point) - set(NAMES))
         if extra:
             problems.append(f"config key 'fidelity.points.{name}': keys {extra} are not allowed; a fidelity point "
                             f"is run at every preset of fidelity.presets and every seed of fidelity.seeds")

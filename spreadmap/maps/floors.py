@@ -72,7 +72,7 @@ def compare(model_a, model_b, frame: pd.DataFrame, targets, level: float = 0.95,
     """
     X = frame[list(NAMES)].to_numpy(float)
     out = frame[list(NAMES)].copy()
-    out["h_over_d"] = X[:, 2] / X[:, 1]
+    out["h_over_d"] = h_over_d(X)
     a_stats, b_stats = model_a.predict_stats(X), model_b.predict_stats(X)
     z = stats.norm.ppf(0.5 + level / 2.0)
     for t in targets:

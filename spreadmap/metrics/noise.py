@@ -26,6 +26,7 @@ import numpy as np
 from scipy import stats
 
 from .. import targets
+from ..design import h_over_d
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -207,17 +208,16 @@ def calibration_factors(table: pd.DataFrame, calibration: list[dict] | None, tar
     numpy.ndarray
         One factor (dimensionless) per row of `table`.
     """
-    import pandas as pd
     factors = np.ones(len(table))
     if not calibration or table.empty:
         return factors
-    h_over_d = (pd.to_numeric(table["h_um"], errors="coerce") / pd.to_numeric(table["d_um"], errors="coerce")).to_numpy(float)
+    ratio = h_over_d(table)
     placed = np.zeros(len(table), dtype=bool)
     for region in calibration:
         if target is not None and region.get("targets") and target not in region["targets"]:
             continue
         below = float(region.get("h_over_d_below", np.inf))
-        inside = ~placed & (h_over_d >= float(region.get("h_over_d_from", 0.0))) & (h_over_d < below)
+        inside = ~placed & (ratio >= float(region.get("h_over_d_from", 0.0))) & (ratio < below)
         factors[inside] = float(region["factor"])
         placed |= inside
     return factors

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from .. import targets as registry
+from ..design import h_over_d
 from ..metrics.noise import calibrated_noise
 from ..schema import checked, section_schema
 from .cells import COUNT
@@ -77,12 +78,12 @@ def modelled_sd(table: pd.DataFrame, target: str, noise_model: dict, counting_c:
     if count_col not in table:
         raise ValueError(f"noise_model: the table has no `{count_col}` column (the count behind {target}'s noise)")
     n = pd.to_numeric(table[count_col], errors="coerce").to_numpy(float)
-    h_over_d = (pd.to_numeric(table["h_um"], errors="coerce") / pd.to_numeric(table["d_um"], errors="coerce")).to_numpy(float)
+    ratio = h_over_d(table)
     n_eff = np.maximum(n, 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         per_sphere = np.where((n > 0) & (value > 0), value / n, stated / (counting_c * np.sqrt(n_eff)))
     refs = {**LAW_REFS, **noise_model}
-    rel = law_rel_sd(n_eff, h_over_d, law, float(refs["n_ref"]), float(refs["h_over_d_ref"]))
+    rel = law_rel_sd(n_eff, ratio, law, float(refs["n_ref"]), float(refs["h_over_d_ref"]))
     return np.abs(per_sphere) * n_eff * rel
 
 

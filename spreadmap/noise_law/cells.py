@@ -19,9 +19,9 @@ import numpy as np
 import pandas as pd
 
 from .. import targets
+from ..design import NAMES, h_over_d
 from ..table import usable_cases as usable
 
-POINT = ("f", "d_um", "h_um", "v_mm_s")
 # the count behind each target's counting law (spreadmap.metrics.case)
 COUNT = {t.name: t.count_column for t in targets.REGISTRY.values() if t.count_column}  # mfr, pd
 
@@ -60,7 +60,7 @@ def seed_cells(cases: pd.DataFrame) -> pd.DataFrame:
         for target, count in COUNT.items():
             values = cell[target].to_numpy(float)
             rows.append({"source": source, "variant": var, "point": point, "target": target,
-                         **{p: float(first[p]) for p in POINT}, "h_over_d": float(first["h_um"] / first["d_um"]),
+                         **{p: float(first[p]) for p in NAMES}, "h_over_d": float(h_over_d(first)),
                          "seeds": k, "dof": k - 1, "mean": float(values.mean()), "s2": float(values.var(ddof=1)),
                          # each seed's deviation from the cell mean, scaled to the SD of one case
                          "dev": tuple((values - values.mean()) * math.sqrt(k / (k - 1))),

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..design import NAMES
 from ..table import usable_cases
 
 
@@ -56,7 +57,7 @@ def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name
         if not counted:
             preset = presets[key["preset"]] if "preset" in key else presets[cell["preset"].iloc[0]]
             spheres_per_fraction = h * preset["width_d"] * d * preset["window_d"] * d / (math.pi * d ** 3 / 6.0)
-        row = {**key, "f": cell["f"].iloc[0], "d_um": d, "h_um": h, "v_mm_s": cell["v_mm_s"].iloc[0], "seeds": len(cell)}
+        row = {**key, **{name: cell[name].iloc[0] for name in NAMES}, "seeds": len(cell)}
         dof = len(cell) - 1
         lo_q, hi_q = stats.chi2.ppf([(1 + level) / 2, (1 - level) / 2], dof) if dof > 0 else (math.nan, math.nan)
         for name in ("mfr", "pd"):

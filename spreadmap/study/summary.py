@@ -22,7 +22,7 @@ from scipy.stats import qmc
 
 from spreadmap.case.substrate import floor_label
 from spreadmap.config import renamed_sections
-from spreadmap.design import NAMES, bounds
+from spreadmap.design import NAMES, Design
 from spreadmap.design import h_over_d as gap_ratio
 from spreadmap.loop.stepper import step_number
 from spreadmap.surrogate.validation import by_band
@@ -38,20 +38,21 @@ def main_effect(model, ranges: dict | None, variable: str, levels, n_base: int =
     from the model's draws of the mean function (the same draw for every point of a level). For
     h/d the sample's d sets h = level x d, and only points whose h lies in its range count
     (`n_points`): an effect over the part of the design space where that h/d exists."""
-    low, high = bounds(ranges)
-    base = qmc.scale(qmc.Sobol(d=len(NAMES), scramble=True, seed=seed).random(n_base), low, high)
-    i_h, i_d = NAMES.index("h_um"), NAMES.index("d_um")
+    design = Design.of(ranges)
+    gap = design.ranges["h_um"]
+    base = pd.DataFrame(qmc.scale(qmc.Sobol(d=len(NAMES), scramble=True, seed=seed).random(n_base), *design.bounds()),
+                        columns=list(NAMES))
     rows = []
     for level in levels:
         X = base.copy()
         if variable == "h_over_d":
-            X[:, i_h] = level * X[:, i_d]
-            X = X[(X[:, i_h] >= low[i_h]) & (X[:, i_h] <= high[i_h])]
+            X["h_um"] = level * X["d_um"]
+            X = X[(X["h_um"] >= gap["min"]) & (X["h_um"] <= gap["max"])]
         else:
-            X[:, NAMES.index(variable)] = level
+            X[variable] = level
         row = {"variable": variable, "level": float(level), "n_points": len(X)}
         if len(X):
-            for target, draws in model.draws(X, n_draws, seed=seed).items():
+            for target, draws in model.draws(X.to_numpy(float), n_draws, seed=seed).items():
                 averages = np.asarray(draws).mean(axis=1)
                 row[target] = float(averages.mean())
                 row[f"{target}_low"], row[f"{target}_high"] = (float(q) for q in np.quantile(averages, [0.025, 0.975]))
@@ -340,11 +341,10 @@ def trends(study: Path | str, ranges: dict | None = None) -> dict[str, pd.DataFr
     from spreadmap.surrogate.saved_model import load_model
 
     model = load_model(path)
-    low, high = bounds(ranges)
-    grids = {"v_mm_s": np.linspace(low[NAMES.index("v_mm_s")], high[NAMES.index("v_mm_s")], 5),
-             "f": np.linspace(low[NAMES.index("f")], high[NAMES.index("f")], 5),
-             "h_over_d": np.geomspace(low[NAMES.index("h_um")] / high[NAMES.index("d_um")],
-                                      high[NAMES.index("h_um")] / low[NAMES.index("d_um")], 6)}
+    design = Design.of(ranges)
+    h, d = design.ranges["h_um"], design.ranges["d_um"]
+    grids = {"v_mm_s": design.axis("v_mm_s", 5), "f": design.axis("f", 5),
+             "h_over_d": np.geomspace(h["min"] / d["max"], h["max"] / d["min"], 6)}
     return {variable: main_effect(model, ranges, variable, levels) for variable, levels in grids.items()}
 
 

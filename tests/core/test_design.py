@@ -60,6 +60,14 @@ def test_h_over_d_by_hand():
     assert h_over_d({"h_um": 60.0, "d_um": 20.0}) == pytest.approx(3.0)
 
 
+def test_h_over_d_of_an_array_reads_its_columns_in_the_designs_order():
+    """Points as an array (columns f, d_um, h_um, v_mm_s), one or many: the same h/d as by name."""
+    X = np.array([[0.2, 10.0, 65.0, 5.0], [0.3, 50.0, 55.0, 15.0], [0.4, 30.0, 75.0, 9.0]])
+    np.testing.assert_allclose(h_over_d(X), [6.5, 1.1, 2.5])
+    assert h_over_d(X[1]) == pytest.approx(1.1) and h_over_d(X[1]).shape == ()
+    assert h_over_d(X.astype(int)).tolist() == [6.5, 1.1, 2.5]  # integers: a float ratio
+
+
 def test_readers_take_a_design_as_they_take_the_config_mapping():
     """The functions that took the config's ``ranges`` give bit-identical numbers for the Design
     built from it (one object threaded, no second mapping)."""
