@@ -40,6 +40,7 @@ MAIN_JOB = [  # what the main job makes (rule all), before its timeline
     *rules.surrogate_validation.output,  # the surrogate's validation: beside the maps, which do not wait for it
     *prediction_targets(),
     "results/maps/sensitivity_ranking_table.csv",
+    *rules.maps_mlp.output,  # the MLP's maps beside the map model's, labelled with its validation
     *rules.decisions.input,
     *expand("results/pictures/{name}.png", name=PICTURES["cases"]),
     *expand("results/vtk/{name}", name=PICTURES["vtk"]),

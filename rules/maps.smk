@@ -31,3 +31,31 @@ rule maps:
         "../envs/analysis.yaml"
     script:
         "../scripts/maps.py"
+
+
+MLP_MAP_FIGURES = ["machine_map", "powder_band_map"]
+
+
+rule maps_mlp:
+    """The MLP ensemble's machine map and powder map (a) beside the map model's (same grids, same y),
+    each labelled with the MLP's cross-validated RMSE over one run's noise SD per target drawn (and
+    the GP's), from the validation table: what the study's model would have said."""
+    input:
+        model="results/surrogate/model_mlp.joblib",
+        table=TRAINING_TABLE,
+        validation=SURROGATE_VALIDATION,
+    output:
+        **{name: report(f"results/maps/{name}_mlp.png", caption=f"captions/{name}_mlp.rst", category="Maps")
+           for name in MLP_MAP_FIGURES},
+    params:
+        maps=MAPS,
+        floor=MAP_BASIS,
+        ranges=RANGES,
+        **_SURROGATE_NOISE,
+    log:
+        "logs/maps_mlp.log",
+    localrule: True
+    conda:
+        "../envs/analysis.yaml"
+    script:
+        "../scripts/maps_mlp.py"

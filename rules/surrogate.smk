@@ -32,6 +32,32 @@ rule surrogate:
         "../scripts/surrogate.py"
 
 
+rule surrogate_mlp:
+    """The bootstrap MLP ensemble trained on every usable case for every target, whatever
+    `surrogate.model` says (scripts/surrogate.py with `model_kind`): what rule maps_mlp draws beside
+    the map model's maps. It waits for nothing but the table, and on two cores runs beside the map
+    model and what reads it (priority just below theirs), before the validation takes both cores."""
+    input:
+        table=TRAINING_TABLE,
+    output:
+        model="results/surrogate/model_mlp.joblib",
+        metadata="results/surrogate/model_mlp.json",
+    params:
+        surrogate=config["surrogate"],
+        model_kind="mlp",
+        ranges=RANGES,
+        **_SURROGATE_NOISE,
+        correction=config["fidelity_correction"] if _CORRECTION else None,  # as the map model's
+    log:
+        "logs/surrogate_mlp.log",
+    localrule: True
+    priority: ANALYSES_FIRST - 1
+    conda:
+        "../envs/analysis.yaml"
+    script:
+        "../scripts/surrogate.py"
+
+
 rule surrogate_validation:
     """The surrogate's validation against the noise on cases it never saw (repeated k-fold of the GP
     and the bootstrap MLP ensemble), the study's MLP protocol beside it and the learning curve: the

@@ -23,19 +23,12 @@ out = Path(sm.output.ranking).parent
 model = load_model(sm.input.model)
 cases = case_noise(read_table(sm.input.table), p.noise_model, p.noise_calibration, p.counting_c)  # noise_model, noise_calibration
 usable = usable_cases(cases, [t for t in TARGETS if t in cases])  # the usable cases with finite MFR and PD
-y = cfg["machine"]["y"]
-auto_y, scores = maps.choose_machine_y(usable, model.targets)
+y, y_note, scores = maps.machine_y_axis(usable, model.targets, cfg["machine"]["y"])
 # each candidate's information beyond MFR and its r with MFR
 write_text_atomically(sm.output.y_choice, scores.assign(floor=p.floor).to_csv(index=False))
-if y == "auto":
-    y = auto_y
+if cfg["machine"]["y"] == "auto":
     print(f"machine map y axis: {y}" + (f" (scores beyond MFR:\n{scores.to_string()})" if len(scores) else
                                         " (no layer-quality target in the model)"))
-elif y not in model.targets:
-    raise ValueError(f"maps.machine.y: {y!r} is not a target of the surrogate ({list(model.targets)})")
-chosen = scores.set_index("target").loc[y] if y in set(scores["target"]) else None
-y_note = (None if chosen is None else f"{y} against MFR over the {int(chosen['n'])} usable cases: Pearson r = "
-          f"{chosen['r_with_mfr']:.2f} [{chosen['r_low']:.2f}, {chosen['r_high']:.2f}] (95 %)")
 machine = {k: v for k, v in cfg["machine"].items() if k != "y"}
 support = cfg["support"]
 floor = p.floor  # the floor the cases ran on, named on every map and in its CSV

@@ -244,3 +244,45 @@ def choose_machine_y(cases: pd.DataFrame, targets) -> tuple[str, pd.DataFrame]:
     if layer.empty:
         return "pd", table
     return str(layer.loc[layer["score"].idxmax(), "target"]), table
+
+
+def machine_y_axis(cases: pd.DataFrame, targets, y: str = "auto") -> tuple[str, str | None, pd.DataFrame]:
+    """The machine map's y axis as config ``maps.machine.y`` asks, with the note the map writes on it.
+
+    Shared by every machine map of a run (the map model's and the MLP's beside it), so both draw
+    the same y.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        The usable cases (``choose_machine_y``).
+    targets : iterable of str
+        The surrogate's targets.
+    y : str, optional
+        ``auto`` (``choose_machine_y``'s choice) or a target of the surrogate.
+
+    Returns
+    -------
+    y : str
+        The target on the y axis.
+    note : str or None
+        y's Pearson r with MFR over the usable cases with its 95 % interval (how far y is from MFR
+        in disguise); None where y was not scored.
+    scores : pandas.DataFrame
+        ``choose_machine_y``'s table of the candidates.
+
+    Raises
+    ------
+    ValueError
+        If `y` names a target the surrogate does not model.
+    """
+    targets = list(targets)
+    auto_y, scores = choose_machine_y(cases, targets)
+    if y == "auto":
+        y = auto_y
+    elif y not in targets:
+        raise ValueError(f"maps.machine.y: {y!r} is not a target of the surrogate ({targets})")
+    chosen = scores.set_index("target").loc[y] if y in set(scores["target"]) else None
+    note = (None if chosen is None else f"{y} against MFR over the {int(chosen['n'])} usable cases: Pearson r = "
+            f"{chosen['r_with_mfr']:.2f} [{chosen['r_low']:.2f}, {chosen['r_high']:.2f}] (95 %)")
+    return y, note, scores

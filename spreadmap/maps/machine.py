@@ -21,7 +21,7 @@ from ..figures import new_figure, save_figure
 from ..targets import axis_label, definition, short
 from . import grids
 from .labels import end_label, which_labelled
-from .style import HATCH, MapResult, fmt, set_limits, support_note
+from .style import HATCH, MapResult, fmt, set_limits, support_note, with_model_note
 
 MACHINE = grids.MAP_DEFAULTS["machine"]
 
@@ -29,7 +29,7 @@ MACHINE = grids.MAP_DEFAULTS["machine"]
 def machine_map(model, stem, y: str = "pd", f: float = MACHINE["f"], d_um: float = MACHINE["d_um"],
                 n_h: int = MACHINE["n_h"], n_v: int = MACHINE["n_v"],
                 h_values=None, v_values=None, ranges=None, support=None, max_labels: int = 7,
-                y_note: str | None = None, floor: str | None = None) -> MapResult:
+                y_note: str | None = None, floor: str | None = None, model_note: str | None = None) -> MapResult:
     """Machine map: MFR (x) against a layer-quality measure y over a grid of h and v, at fixed powder (f, d).
 
     The grid is evaluated on the surrogate (``grids.evaluate``) and drawn as the module docstring
@@ -67,6 +67,9 @@ def machine_map(model, stem, y: str = "pd", f: float = MACHINE["f"], d_um: float
     floor : str or None, optional
         The floor the cases ran on (``spreadmap.case.substrate.floor_label``), named on the figure
         and in the CSV.
+    model_note : str or None, optional
+        A line under the title naming the model drawn and its validation
+        (``validation_note.validation_note``); None: none.
 
     Returns
     -------
@@ -83,7 +86,7 @@ def machine_map(model, stem, y: str = "pd", f: float = MACHINE["f"], d_um: float
     support = support or grids.MAP_DEFAULTS["support"]
     grid = machine_grid(model, y, f, d_um, n_h, n_v, h_values, v_values, ranges, support)
     h, v = grids.values(h_values, n_h, "h_um", ranges), grids.values(v_values, n_v, "v_mm_s", ranges)
-    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note, floor)
+    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note, floor, model_note)
 
 
 def machine_grid(model, y: str = "pd", f: float = MACHINE["f"], d_um: float = MACHINE["d_um"],
@@ -136,7 +139,8 @@ def emptiest_corner(ax, xs, ys) -> tuple[float, float]:
     return min(CORNERS, key=count)
 
 
-def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note=None, floor=None) -> MapResult:
+def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note=None, floor=None,
+                     model_note=None) -> MapResult:
     shape = (len(h), len(v))
     X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
     sx, sy = grid["mfr_model_sd"].to_numpy().reshape(shape), grid[f"{y}_model_sd"].to_numpy().reshape(shape)
@@ -200,7 +204,7 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
     ax.grid(alpha=0.3)
     beyond = "" if ok.any() else "BEYOND THE DATA: "
     title = ax.set_title(f"{beyond}Machine map at f = {fmt(f)}, d = {fmt(d_um)} um: h {fmt(h.min())}-{fmt(h.max())} um, "
-                 f"v {fmt(v.min())}-{fmt(v.max())} mm/s", fontsize=10)
+                 f"v {fmt(v.min())}-{fmt(v.max())} mm/s" + with_model_note(model_note), fontsize=10)
     note = support_note(fig, grid["supported"].to_numpy(), support, "settings")
     paths = save_figure(fig, stem, grid, floor)
     return MapResult(paths, grid, {"y": y, "note": note, "title": title.get_text(), "n_unsupported": int((~ok).sum())})

@@ -25,7 +25,7 @@ from ..figures import new_figure, save_figure
 from ..targets import axis_label, short
 from . import grids
 from .labels import end_label, right_labels
-from .style import HATCH, MapResult, fmt, set_limits, support_note
+from .style import HATCH, MapResult, fmt, set_limits, support_note, with_model_note
 
 POWDER = grids.MAP_DEFAULTS["powder"]
 DEFAULT_SUPPORT = grids.MAP_DEFAULTS["support"]
@@ -34,7 +34,7 @@ EFFECT = ("change", "change_low", "change_high", "p_increase")  # grids.f_effect
 
 def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"], n_d: int = 41,
                     n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
-                    seed: int = 0, floor: str | None = None) -> MapResult:
+                    seed: int = 0, floor: str | None = None, model_note: str | None = None) -> MapResult:
     """Powder map (a): MFR and y against d, one curve per friction value, at fixed machine settings (h, v).
 
     The lowest and the highest friction are drawn with their 95 % bands of the mean (model SD),
@@ -72,6 +72,9 @@ def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_
     floor : str or None, optional
         The floor the cases ran on (``spreadmap.case.substrate.floor_label``), named on the figure
         and in the CSV.
+    model_note : str or None, optional
+        A line under the title naming the model drawn and its validation
+        (``validation_note.validation_note``); None: none.
 
     Returns
     -------
@@ -88,7 +91,7 @@ def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_
     """
     support = support or DEFAULT_SUPPORT
     table = powder_band_grid(model, y, h_um, v_mm_s, n_d, n_f, d_values, f_values, ranges, support, draws, seed)
-    return draw_powder_band_map(table, stem, y, support, floor)
+    return draw_powder_band_map(table, stem, y, support, floor, model_note)
 
 
 def powder_band_grid(model, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"],
@@ -106,8 +109,10 @@ def powder_band_grid(model, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s:
     return grid.merge(effect, on="d_um", how="left")
 
 
-def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor: str | None = None) -> MapResult:
-    """Map (a) from ``powder_band_grid``'s table (or its CSV read back); saved with that table."""
+def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor: str | None = None,
+                         model_note: str | None = None) -> MapResult:
+    """Map (a) from ``powder_band_grid``'s table (or its CSV read back); saved with that table
+    (``model_note``: a line under the title, as ``powder_band_map`` takes it)."""
     targets = ["mfr", y]
     fv, d = np.unique(table["f"]), np.unique(table["d_um"])
     h_um, v_mm_s = float(table["h_um"].iloc[0]), float(table["v_mm_s"].iloc[0])
@@ -157,7 +162,7 @@ def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor
                Line2D([], [], color="0.3", lw=1.4, ls=":", label="beyond the data")]
     axes[0, 0].legend(handles=handles, fontsize=7.5, loc="best")
     fig.suptitle(f"Powder map (a): friction f = {fmt(fv[0])}-{fmt(fv[-1])} as the diameter varies, "
-                 f"at h = {fmt(h_um)} um, v = {fmt(v_mm_s)} mm/s", fontsize=11)
+                 f"at h = {fmt(h_um)} um, v = {fmt(v_mm_s)} mm/s" + with_model_note(model_note), fontsize=11)
     note = support_note(fig, table["supported"].to_numpy(), support)
     paths = save_figure(fig, stem, table, floor)
     return MapResult(paths, table, {"note": note, "effect": effect})

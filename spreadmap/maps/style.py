@@ -2,6 +2,7 @@
 ``spreadmap.targets``)."""
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,6 +47,27 @@ def fmt(value: float, digits: int = 4) -> str:
         The number formatted.
     """
     return f"{value:.{digits}g}"
+
+
+def with_model_note(note: str | None, width: int = 120) -> str:
+    """What a map's title gets after it for ``note`` (``validation_note``): the note on lines of its
+    own, each of its lines wrapped at `width` characters; "" without one (the title unchanged).
+
+    Parameters
+    ----------
+    note : str or None
+        The note; None or "": none.
+    width : int, optional
+        The longest line [characters].
+
+    Returns
+    -------
+    str
+        "\\n" and the wrapped note, or "".
+    """
+    if not note:
+        return ""
+    return "".join("\n" + textwrap.fill(line, width, break_long_words=False) for line in note.split("\n"))
 
 
 def support_rule(support: dict) -> str:

@@ -17,6 +17,10 @@ def test_main_job_plans_without_chosen_points(tmp_path):
     jobs = planned_jobs(dry.stdout)
     assert "predict" not in jobs and "results/surrogate/predictions.csv" not in dry.stdout
     assert jobs["surrogate"] == 1 and jobs["surrogate_validation"] == 1 and jobs["all"] == 1
+    # issue 52: the MLP ensemble's machine and powder maps beside the map model's, asked for by the main job
+    assert jobs["surrogate_mlp"] == 1 and jobs["maps_mlp"] == 1
+    for name in ("machine_map_mlp.png", "powder_band_map_mlp.png", "machine_map.png", "powder_band_map.png"):
+        assert f"results/maps/{name}" in dry.stdout, name
 
 
 def test_main_job_predicts_the_chosen_points(tmp_path):
@@ -60,6 +64,13 @@ def test_the_maps_do_not_wait_for_the_surrogates_validation(tmp_path):
     assert {("surrogate_validation", "all"), ("surrogate_validation", "timeline")} <= edges
     assert ("converge_table", "surrogate_validation") in edges and ("converge_table", "surrogate") in edges
     assert "surrogate_validation" not in upstream(edges, "surrogate")
+    # the MLP's maps read its validation; its model waits for the table alone, and nothing of the map
+    # model's path waits for either
+    assert {"surrogate_mlp", "surrogate_validation"} <= upstream(edges, "maps_mlp")
+    assert "surrogate_validation" not in upstream(edges, "surrogate_mlp")
+    for rule in ("maps", "decide", "explorer", "predict", "surrogate_validation"):
+        assert not {"surrogate_mlp", "maps_mlp"} & upstream(edges, rule), rule
+    assert {("maps_mlp", "all"), ("maps_mlp", "timeline")} <= edges
 
     write_config(wf, {"points": {"named": point}, "pictures": {"cases": [], "vtk": []},
                       "surrogate": {"model": "best"}}, DROP)
