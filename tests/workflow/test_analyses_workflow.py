@@ -28,7 +28,7 @@ SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
 })
 MAIN_FIGURES = ["path", "surrogate_parity", "surrogate_r2_vs_neurons", "surrogate_learning_curve", "machine_map",
                 "powder_band_map", "powder_cluster_map", "parallel_coordinates", "regime_overlay",
-                "sensitivity_ranking", "demo", "timeline"]
+                "sensitivity_ranking", "demo", "timeline", "machine_map_mlp", "powder_band_map_mlp"]
 STUDY_FIGURES = ["distributions", "statistics", "sampling_study"]
 
 
@@ -47,7 +47,7 @@ def test_main_job_writes_every_analysis_output(finished_run):
     for stem in ["convergence/distributions", "convergence/statistics", "convergence/sampling_study",
                  "surrogate/surrogate_parity", "maps/machine_map", "maps/powder_band_map", "maps/powder_cluster_map",
                  "maps/parallel_coordinates", "maps/regime_overlay", "maps/sensitivity_ranking", "pictures/demo",
-                 "converge/timeline"]:
+                 "converge/timeline", "maps/machine_map_mlp", "maps/powder_band_map_mlp"]:
         for ext in ("png", "pdf", "csv"):
             assert (wf / f"{stem}.{ext}").stat().st_size > 0, f"{stem}.{ext}"
     assert (wf / "maps" / "regime_overlay_plane.csv").stat().st_size > 0  # the regime figure's (d, h) plane
@@ -68,6 +68,9 @@ def test_main_job_writes_every_analysis_output(finished_run):
     assert meta["source_path"].endswith("converge/table.csv")  # trained on the main job's converge run
     assert meta["source_sha256"] == hashlib.sha256(source.read_bytes()).hexdigest()
     assert meta["n_train"] + meta["n_test"] == meta["n_usable"] > 0
+    # the MLP ensemble beside the map model (issue 52): an MLP for every target, on the same table
+    mlp = json.loads((wf / "surrogate" / "model_mlp.json").read_text())
+    assert set(mlp["map_model"].values()) == {"mlp"} and mlp["source_sha256"] == meta["source_sha256"]
     predictions = (wf / "surrogate" / "predictions.csv").read_text()
     assert {"mfr_model_sd", "mfr_run_sd"} <= set(predictions.splitlines()[0].split(","))
     # the decisions and the explorer page come with the main job
