@@ -70,6 +70,58 @@ def leaves_no_process(request):
         pytest.fail(f"the test left {len(survivors)} process(es) running (killed now): {names}")
 
 
+# The test files that take longest, with their seconds (setup + call, pytest --durations=60) in the
+# full run of 2026-12-06 (982 tests, two workers, on a machine loaded 4-5x by other work: only the
+# order matters). `-n 2 --dist loadfile` hands out whole files; xdist's own order puts the files
+# with the most tests first, so these few-test, long files came last and one worker ran the tail
+# alone. Handed out longest first (below), the two workers end together. A file not listed counts 0.
+FILE_SECONDS = {
+    "tests/workflow/test_analyses_workflow.py": 1210, "tests/case/test_stability_yade.py": 691,
+    "tests/workflow/test_workflow_failures.py": 541, "tests/workflow/test_workflow.py": 442,
+    "tests/workflow/test_faults_yade.py": 331, "tests/workflow/test_slurm.py": 278,
+    "tests/fidelity/test_fidelity_workflow.py": 244, "tests/case/test_cases.py": 183,
+    "tests/case/test_adhesion_yade.py": 173, "tests/surrogate/test_fit_once.py": 166,
+    "tests/benchmarks/test_benchmarks.py": 143, "tests/case/test_case_cost_yade.py": 92,
+    "tests/workflow/test_dry_run.py": 79, "tests/case/test_render.py": 77, "tests/loop/test_recheck_stop.py": 76,
+    "tests/maps/test_maps.py": 72, "tests/case/test_physics_yade.py": 67, "tests/study/test_study_cases.py": 66,
+    "tests/workflow/test_faults.py": 60, "tests/case/test_reproduce_published_yade.py": 58,
+    "tests/case/test_psd_yade.py": 53, "tests/study/test_restore.py": 42,
+}
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """Under `--dist loadfile`: whole files, the longest first (FILE_SECONDS), and a worker given its
+    next file only when one test of its current file is left (xdist's own heuristic gives it at two
+    left, so a worker held a queued long file behind its own last long test while the other
+    one idled)."""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class LongestFileFirst(LoadFileScheduling):
+        ordered = False
+
+        def _assign_work_unit(self, node) -> None:
+            if not self.ordered:  # once, before the first file is handed out; xdist's order breaks ties
+                files = sorted(self.workqueue.items(), key=lambda item: -FILE_SECONDS.get(item[0], 0))
+                self.workqueue.clear()
+                self.workqueue.update(files)
+                self.ordered = True
+            super()._assign_work_unit(node)
+
+        def _reschedule(self, node) -> None:
+            if node.shutting_down:
+                return
+            if not self.workqueue:
+                node.shutdown()
+                return
+            if self._pending_of(self.assigned_work[node]) > 1:  # a worker holds its last test until
+                return  # it has the next one or is shut down: 1 is the lowest that never stalls it
+            self._assign_work_unit(node)
+
+    return LongestFileFirst(config, log)
+
+
 @pytest.fixture(scope="session")
 def config() -> dict:
     return spreadmap_config.load(ROOT / "config.yaml")

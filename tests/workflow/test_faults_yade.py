@@ -7,7 +7,7 @@ The loop at its smallest that still has a batch: 4 LDS cases, one step, a batch 
 LDS points), a last step at the budget of 7 (smoke cases of large particles, a few seconds each).
 The uninterrupted run is made once (module fixture) and both faults are compared with it. A case
 that hangs (its outer timeout ends it, it is retried once, recorded as failed with its reason and
-log, the sweep goes on) is tests/workflow/test_workflow.py's failed-case test; a requeued SLURM job is in
+log, the sweep goes on) is tests/workflow/test_workflow_failures.py's failed-case test; a requeued SLURM job is in
 tests/workflow/test_slurm.py (its cluster fixture)."""
 import copy
 import csv
