@@ -89,6 +89,14 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--study", type=Path, default=ROOT / "docs" / "study")
     ap.add_argument("--fidelity", type=Path, default=ROOT / "docs" / "fidelity" / "cases_presets.csv")
+    ap.add_argument("--cases", type=Path, nargs="*", default=None,
+                    help="the truth's tables instead of --study's published ones (e.g. an adhesive main job's "
+                         "cases.csv); their `default` cases are fitted")
+    ap.add_argument("--law-cases", type=Path, nargs="*", default=None,
+                    help="the cost law's tables (one intercept each) instead of --study's and --fidelity's")
+    ap.add_argument("--law-scene", choices=["full_pile", "shipped"], default="full_pile",
+                    help="the scene the law's tables ran: full_pile (the published study's, before the fed "
+                         "heap) or shipped (the config's as it is, e.g. a main job run since the fed heap)")
     ap.add_argument("--config", type=Path, default=ROOT / "config.yaml")
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--max-cases", type=int, default=160)
@@ -100,19 +108,25 @@ def main(argv=None) -> int:
     ap.add_argument("--calibration-seeds", type=int, default=None,
                     help="the margin is calibrated on seeds 0 to this - 1 and judged on the rest (default: the first "
                          "half); more seeds with the same value judge the same margin on more held-out replays")
+    ap.add_argument("--min-stop-cases", type=int, default=None,
+                    help="the fewest cases a stop may have (default: the config's converge.min_stop_cases)")
     ap.add_argument("--jobs", type=int, default=2)
     a = ap.parse_args(argv)
     import joblib
 
     a.out.mkdir(parents=True, exist_ok=True)
     config = load(a.config)
-    tables = published_tables(a.study)
-    law_tables = tables + ([pd.read_csv(a.fidelity)] if a.fidelity.exists() else [])
+    tables = [pd.read_csv(f) for f in a.cases] if a.cases else published_tables(a.study)
+    if a.law_cases:
+        law_tables = [pd.read_csv(f) for f in a.law_cases]
+    else:
+        law_tables = tables + ([pd.read_csv(a.fidelity)] if a.fidelity.exists() else [])
     # the law relates the work a case planned to its CPU: the published cases ran the full pile
     # (before scene.fed_heap shipped), so their planned work is that scene's; the fitted law then
     # prices the shipped scene's planned work (docs/case_cost: it predicts the fed cost)
     published_scene = copy.deepcopy(config)
-    published_scene["scene"]["fed_heap"] = False
+    if a.law_scene == "full_pile":
+        published_scene["scene"]["fed_heap"] = False
     law = fit_law(law_tables, published_scene)
     write_text_atomically(a.out / "cost_law.json", json.dumps(law, indent=1) + "\n")
     print(f"cost law on {law['cases']} published cases: CPU s = exp({law['ln_a']:.3f}) N^{law['b_particles']:.3f} "
@@ -155,15 +169,18 @@ def main(argv=None) -> int:
     if not 0 < half < a.seeds:
         raise SystemExit(f"--calibration-seeds: value {half} must be between 1 and --seeds - 1 ({a.seeds - 1})")
     calib, test = paths[paths["seed"] < half], paths[paths["seed"] >= half]
-    margin = replay.calibrate_margin(calib, a.calibrate_on)
-    print(f"margin calibrated on seeds 0-{half - 1} at tolerances {a.calibrate_on}: {margin} (the smallest that "
-          "makes 90 % of their stops, pooled over the designs, honest)")
+    min_cases = (int(config["converge"].get("min_stop_cases") or 0) if a.min_stop_cases is None
+                 else a.min_stop_cases)
+    margin = replay.calibrate_margin(calib, a.calibrate_on, min_cases=min_cases)
+    print(f"margin calibrated on seeds 0-{half - 1} at tolerances {a.calibrate_on}, stops from {min_cases} cases: "
+          f"{margin} (the smallest that makes 90 % of their stops, pooled over the designs, honest)")
     all_stops, all_honesty = [], []
     for rule, m, frame in (("bare estimate", 1.0, paths), (f"x{margin:g} (held-out seeds)", margin, test)):
         if not np.isfinite(m):
             continue
         for tol in a.tolerances:
-            st = replay.stops(frame, {t: tol for t in replay.TARGETS}, margin=m).assign(tolerance=tol, rule=rule, margin=m)
+            st = replay.stops(frame, {t: tol for t in replay.TARGETS}, margin=m,
+                              min_cases=min_cases).assign(tolerance=tol, rule=rule, margin=m)
             all_stops.append(st)
             all_honesty.append(replay.honesty(st).assign(tolerance=tol, rule=rule, margin=m))
     stops = pd.concat(all_stops, ignore_index=True)
@@ -178,7 +195,7 @@ def main(argv=None) -> int:
     plot_replay(paths, hon, a.out / "replay")
     write_text_atomically(a.out / "summary.md", summary_markdown(paths, hon, margin, law))
     meta = {"command": "benchmarks/replay.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-            "margin": margin, "margin_calibrated_on_seeds": f"0-{half - 1}",
+            "margin": margin, "margin_calibrated_on_seeds": f"0-{half - 1}", "min_stop_cases": min_cases,
             "margin_calibrated_at_tolerances": a.calibrate_on, "seeds": a.seeds, "max_cases": a.max_cases,
             "designs": a.designs, "tolerances": a.tolerances,
             "replays": int(paths.groupby(["design", "seed"]).ngroups),

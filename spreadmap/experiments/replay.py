@@ -232,11 +232,12 @@ def replay_one(world: World, design: Mapping, seed: int, max_cases: int = 160,
 
 
 def stops(paths: pd.DataFrame, tolerance: Mapping[str, float], hold_for: int = 1,
-          margin: float = 1.0) -> pd.DataFrame:
+          margin: float = 1.0, min_cases: int = 0) -> pd.DataFrame:
     """Where each replay would have stopped with this tolerance per target, its cost and its true error.
 
     The stop is the first step at which every target's estimate times ``margin`` is within its
-    tolerance, ``hold_for`` steps in a row; a replay that never stops within its path is a row with
+    tolerance, ``hold_for`` steps in a row, with at least ``min_cases`` cases (the loop's
+    ``converge.min_stop_cases``); a replay that never stops within its path is a row with
     ``stopped`` False (its last step).
 
     Parameters
@@ -250,6 +251,8 @@ def stops(paths: pd.DataFrame, tolerance: Mapping[str, float], hold_for: int = 1
         Steps in a row the rule must hold.
     margin : float, optional
         Factor on the estimate.
+    min_cases : int, optional
+        The fewest cases a stop may have.
 
     Returns
     -------
@@ -264,9 +267,9 @@ def stops(paths: pd.DataFrame, tolerance: Mapping[str, float], hold_for: int = 1
         ok = np.all([margin * p[f"{t}_estimate"].to_numpy() <= tol for t, tol in tolerance.items()], axis=0)
         run = 0
         hit = None
-        for i, good in enumerate(ok):
+        for i, (good, n) in enumerate(zip(ok, p["n"].to_numpy())):
             run = run + 1 if good else 0
-            if run >= hold_for:
+            if run >= hold_for and n >= min_cases:
                 hit = i
                 break
         row = {"design": design, "seed": seed, "stopped": hit is not None}
@@ -283,7 +286,8 @@ def stops(paths: pd.DataFrame, tolerance: Mapping[str, float], hold_for: int = 1
 
 
 def calibrate_margin(paths: pd.DataFrame, tolerances: Sequence[float], share: float = 0.9,
-                     grid: Sequence[float] = tuple(np.round(np.arange(1.0, 2.51, 0.05), 2))) -> float:
+                     grid: Sequence[float] = tuple(np.round(np.arange(1.0, 2.51, 0.05), 2)),
+                     min_cases: int = 0) -> float:
     """The smallest margin at which the stops of ``paths`` are honest at least ``share`` of the time.
 
     Pooled over designs and tolerances, a stop is honest when its true error is within tolerance;
@@ -300,6 +304,8 @@ def calibrate_margin(paths: pd.DataFrame, tolerances: Sequence[float], share: fl
         The share of honest stops asked for, in (0, 1].
     grid : sequence of float, optional
         The margins tried, in order (default 1.0 to 2.5 by 0.05).
+    min_cases : int, optional
+        The fewest cases a stop may have (``stops``).
 
     Returns
     -------
@@ -307,7 +313,7 @@ def calibrate_margin(paths: pd.DataFrame, tolerances: Sequence[float], share: fl
         The first margin of ``grid`` that does it; NaN if none.
     """
     for m in grid:
-        st = pd.concat([stops(paths, {t: tol for t in TARGETS}, margin=m) for tol in tolerances])
+        st = pd.concat([stops(paths, {t: tol for t in TARGETS}, margin=m, min_cases=min_cases) for tol in tolerances])
         st = st[st["stopped"]]
         if len(st) and st["true_within"].mean() >= share:
             return float(m)

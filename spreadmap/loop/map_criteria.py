@@ -78,7 +78,7 @@ MIN_CASES = 5  # usable cases a target needs before its model is fitted and the 
 def settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[str, Any]:
     """The criteria's settings: config ``converge:`` (or a part of it) with the schema's defaults.
 
-    The one reader of the criteria's keys (``stop_on``, ``hold_for``, ``map_error``, ``cv_rmse``,
+    The one reader of the criteria's keys (``stop_on``, ``hold_for``, ``min_stop_cases``, ``map_error``, ``cv_rmse``,
     ``map_change``, ``ci``); their defaults are the schema's alone (``spreadmap.schema.checked``),
     and the schema refuses unknown criteria, statistics and keys. A CI half-width of null drops
     that statistic from the criterion.
@@ -93,7 +93,7 @@ def settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[
     Returns
     -------
     dict
-        ``stop_on``, ``hold_for`` and one dict per criterion.
+        ``stop_on``, ``hold_for``, ``min_stop_cases`` and one dict per criterion.
 
     Raises
     ------
@@ -102,7 +102,7 @@ def settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[
         the message names the key.
     """
     conv = checked("converge", cfg)
-    out = {key: conv[key] for key in ("stop_on", "hold_for", *CRITERIA)}
+    out = {key: conv[key] for key in ("stop_on", "hold_for", "min_stop_cases", *CRITERIA)}
     out["ci"]["halfwidth"] = {k: v for k, v in out["ci"]["halfwidth"].items() if v is not None}
     unknown = sorted(set(out["map_error"]["tolerance"]) - set(targets)) if targets is not None else []
     if unknown:
@@ -353,15 +353,17 @@ def to_json(result: Mapping[str, Any]) -> dict[str, Any]:
 
 class Tracker:
     """The path of a run: for every batch the criteria, the first batch at which each held, and
-    the stop decision (all criteria of ``stop_on`` hold at ``hold_for`` consecutive batches)."""
+    the stop decision (all criteria of ``stop_on`` hold at ``hold_for`` consecutive batches, the
+    last with at least ``min_cases`` cases)."""
 
     def __init__(self, stop_on: Sequence[str] = CRITERIA, hold_for: int = 1,
-                 history: Sequence[Mapping] | None = None):
+                 history: Sequence[Mapping] | None = None, min_cases: int = 0):
         bad = set(stop_on) - set(CRITERIA)
         if bad:
             raise ValueError(f"unknown criteria {sorted(bad)}; allowed: {list(CRITERIA)}")
         self.stop_on = list(stop_on)
         self.hold_for = max(int(hold_for), 1)
+        self.min_cases = int(min_cases)
         self.history: list[dict] = [dict(h) for h in (history or [])]
 
     def add(self, n_cases: int, result: Mapping[str, Any]) -> dict:
@@ -382,10 +384,12 @@ class Tracker:
 
     def stop(self) -> bool:
         tail = self.history[-self.hold_for:]
-        return len(tail) == self.hold_for and all(h["all_hold"] for h in tail)
+        return (len(tail) == self.hold_for and all(h["all_hold"] for h in tail)
+                and tail[-1]["n"] >= self.min_cases)
 
     def summary(self) -> dict[str, Any]:
         last = self.history[-1] if self.history else {}
-        return {"stop_on": self.stop_on, "hold_for": self.hold_for, "first_held": self.first_held(),
+        return {"stop_on": self.stop_on, "hold_for": self.hold_for, "min_stop_cases": self.min_cases,
+                "first_held": self.first_held(),
                 "now": {c: last.get(c) for c in CRITERIA}, "criteria_met": self.stop(),
                 "path": self.history}

@@ -5,7 +5,8 @@ criteria (``map_criteria``), keeps the path (the criteria at every batch, the fi
 which each held), reports the study's rule beside them (``study_rule.batches_until_converged``
 on the cases in run order, same batches), and decides:
 
-* ``criteria met``: every criterion of ``converge.stop_on`` holds (``hold_for`` batches in a row);
+* ``criteria met``: every criterion of ``converge.stop_on`` holds (``hold_for`` batches in a row),
+  with at least ``converge.min_stop_cases`` cases run;
 * ``case budget``: ``converge.budget`` cases run;
 * ``CPU budget``: the cases' modelled CPU (``cost.PlannedCost``: the law of the spheres and
   steps each case's scene planned, the same on every machine, so that the same config stops at
@@ -164,13 +165,15 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
     if models_out is not None:
         models_out.update(result["models"])
     tracker = map_criteria.Tracker(crit["stop_on"], crit["hold_for"],
-                                   None if prev_step is None else prev_step["criteria"]["path"])
+                                   None if prev_step is None else prev_step["criteria"]["path"],
+                                   min_cases=crit["min_stop_cases"])
     tracker.add(n, result)
     cpu_h = cpu_hours(table)
     modelled_h = (float(np.sum(cost(table[list(NAMES)].to_numpy(float)))) / 3600.0 if cost is not None
                   else float("nan"))
     budget_h = modelled_h if cost is not None else cpu_h
     reason = None
+    held_early = tracker.history[-1]["all_hold"] and n < tracker.min_cases
     if tracker.stop():
         reason = "criteria met"
     elif n >= int(s["budget"]):
@@ -181,7 +184,9 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
         "n": int(n), "usable": int(usable(table).sum()), "cpu_hours": cpu_h,
         "cpu_hours_modelled": modelled_h,
         "map_statistics": result.get("map_statistics", {}),
-        "stop": reason is not None, "reason": reason or "criteria not met yet",
+        "stop": reason is not None,
+        "reason": reason or (f"criteria met, but a stop needs {tracker.min_cases} cases (converge.min_stop_cases)"
+                             if held_early else "criteria not met yet"),
         "criteria": {**tracker.summary(), "at_this_batch": map_criteria.to_json(result)},
         "study_rule": _study_rule(lds_table, targets, s, len(lds_table), tolerance, floors),
         "study_rule_path": list((prev_step or {}).get("study_rule_path", [])),

@@ -180,7 +180,7 @@ def test_each_settings_reader_given_nothing_returns_the_schemas_defaults(schema)
     converge = schema_defaults(props["converge"])
     step = stepper.step_settings(None)
     assert {k: v for k, v in step.items() if k != "criteria"} == converge
-    criteria = {k: converge[k] for k in ("stop_on", "hold_for", *map_criteria.CRITERIA)}
+    criteria = {k: converge[k] for k in ("stop_on", "hold_for", "min_stop_cases", *map_criteria.CRITERIA)}
     assert step["criteria"] == map_criteria.settings({}) == criteria
     assert DEFAULT_FLOORS == schema_defaults(props["study_rule"])["floors"]
     substrate = schema_defaults(props["scene"]["properties"]["substrate"])

@@ -581,6 +581,19 @@ def test_tracker_first_held_and_stop():
     assert tr.first_held() == {"map_error": None, "cv_rmse": 48, "map_change": None, "ci": 64}
 
 
+def test_tracker_stops_only_from_min_cases():
+    """converge.min_stop_cases: criteria that hold at the start's 32 cases do not stop the run; they
+    stop it at the first step with at least 48 cases where they hold."""
+    tr = mc.Tracker(["cv_rmse"], hold_for=1, min_cases=48)
+    ok = {"cv_rmse": {"value": 0.5, "holds": True}, "map_change": None, "ci": None}
+    tr.add(32, ok)
+    assert not tr.stop()
+    tr.add(48, ok)
+    assert tr.stop()
+    assert tr.summary()["min_stop_cases"] == 48
+    assert mc.settings({})["min_stop_cases"] == 0  # the schema's default: any step
+
+
 # ---------------------------------------------------------------------------------------------
 # active batches
 # ---------------------------------------------------------------------------------------------
@@ -718,6 +731,18 @@ def test_converge_stops_early_on_a_smooth_function():
     assert "criteria met" in rec["summary"] and "study's rule" in rec["summary"]
     # the step's own record of the study's rule: one entry per batch
     assert [h["n"] for h in rec["study_rule_path"]] == [r["n"] for r in path]
+
+
+@pytest.mark.slow
+def test_converge_holds_no_stop_before_min_stop_cases():
+    """A loose tolerance holds at the start's 24 cases; converge.min_stop_cases 36 keeps the run going
+    one batch, the record saying why, and it stops at 36."""
+    cfg = {**FAST, "start": 24, "batch": 12, "budget": 120, "stop_on": ["map_error"], "min_stop_cases": 36,
+           "map_error": {"tolerance": {"mfr": 0.5, "pd": 0.5}, "draws": 16}}
+    rec, path = _run_loop(_smooth, 0.005, cfg)
+    assert [r["n"] for r in path] == [24, 36]
+    assert not path[0]["stop"] and "min_stop_cases" in path[0]["reason"]
+    assert rec["reason"] == "criteria met" and rec["criteria"]["first_held"]["map_error"] == 24
 
 
 @pytest.mark.slow
@@ -969,3 +994,7 @@ def test_replay_stops_and_honesty_on_a_constructed_path():
     # the smallest margin on the grid that makes 95 % of the stops honest: 1.05 (0.0126 > 0.0125)
     assert replay.calibrate_margin(paths, [0.0125], share=0.95) == 1.05
     assert replay.calibrate_margin(paths, [0.0125], share=0.9) == 1.0
+    # stops from 64 cases only (converge.min_stop_cases): the stop at 48 moves to 64, all honest
+    late = replay.stops(paths, {"mfr": 0.0125, "pd": 0.0125}, min_cases=64)
+    assert (late["n"] == 64).all() and late["true_within"].all()
+    assert replay.calibrate_margin(paths, [0.0125], share=0.95, min_cases=64) == 1.0
