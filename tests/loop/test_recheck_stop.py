@@ -59,6 +59,8 @@ def test_a_runs_steps_decided_again_with_its_own_noise_law_reproduce_its_path():
     steps = run_steps(run)[:2]
     table = pd.read_csv(run / "cases.csv")
     cfg = spreadmap_config.load(ROOT / "config.yaml")
+    # the stop rule as the run ran it (config.yaml's now: margin 1.0, stops from 64 cases; docs/replay/adhesive)
+    cfg["converge"]["map_error"]["margin"], cfg["converge"]["min_stop_cases"] = 1.7, 0
     law = steps[0]["noise_model"]
     again = recheck_path(table, cfg, steps, law)
     for mine, published in zip(again, steps):
