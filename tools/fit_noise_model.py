@@ -23,6 +23,7 @@ Writes to docs/noise/adhesive: README.md, law.json, cells.csv, heldout.csv, repl
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import math
 from pathlib import Path
@@ -500,10 +501,15 @@ def run_replay(run_dir: Path, cfg: dict, laws: dict) -> pd.DataFrame:
     from spreadmap.schema import checked
 
     steps = run_steps(run_dir)
-    settings = checked("converge", cfg["converge"])
     recorded = steps[0]["settings"]  # what the run recorded of its settings, and its map-error tolerance and margin
     recorded_error = {t: (v["tolerance"], v["margin"])
                       for t, v in steps[0]["criteria"]["at_this_batch"]["map_error"]["targets"].items()}
+    # decided again with the stop rule the run ran (its margin; min_stop_cases where it recorded one, else
+    # 0: runs before that key stopped from their first step), whatever config.yaml's rule is today
+    cfg = copy.deepcopy(cfg)
+    cfg["converge"]["map_error"]["margin"] = next(iter(recorded_error.values()))[1]
+    cfg["converge"]["min_stop_cases"] = int(steps[0]["criteria"].get("min_stop_cases", 0))
+    settings = checked("converge", cfg["converge"])
     error = {t: (tol, settings["map_error"]["margin"]) for t, tol in settings["map_error"]["tolerance"].items()}
     if {k: settings[k] for k in recorded} != recorded or recorded_error != error:
         raise ValueError(f"{run_dir}: the run's loop settings {recorded} {recorded_error} are not the config's")
@@ -815,7 +821,9 @@ def summary_lines(results: dict, chosen: str, cells: pd.DataFrame, replay: pd.Da
               + " (`level` holds the dry law's power of h/d, which the cells reject.)"]
         last = path.iloc[-1]
         error = cfg["converge"]["map_error"]
-        need = min(error["tolerance"][t] for t in TARGETS) / error["margin"]
+        # the margin the run ran with (the estimate is margin x the larger of the two), not config.yaml's today
+        margin = last["mfr_estimate"] / max(last["mfr_cv_net_of_noise"], last["mfr_posterior"])
+        need = min(error["tolerance"][t] for t in TARGETS) / margin
         L[-1] += (f" At {int(last['n'])} cases the refit leaves the CV error net of noise at "
                   f"MFR {last['mfr_cv_net_of_noise']:.4f}, "
                   f"PD {last['pd_cv_net_of_noise']:.4f} and the posterior SD at {last['mfr_posterior']:.4f}, "
