@@ -58,6 +58,7 @@ which each held, and whether all the required ones hold now).
 """
 from __future__ import annotations
 
+import copy
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -76,12 +77,8 @@ MIN_CASES = 5  # usable cases a target needs before its model is fitted and the 
 
 
 def settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[str, Any]:
-    """The criteria's settings: config ``converge:`` (or a part of it) with the schema's defaults.
-
-    The one reader of the criteria's keys (``stop_on``, ``hold_for``, ``min_stop_cases``, ``map_error``, ``cv_rmse``,
-    ``map_change``, ``ci``); their defaults are the schema's alone (``spreadmap.schema.checked``),
-    and the schema refuses unknown criteria, statistics and keys. A CI half-width of null drops
-    that statistic from the criterion.
+    """The criteria's settings from config ``converge:`` (or a part of it), the schema's defaults
+    filled (``spreadmap.schema.checked``): ``criteria(checked("converge", cfg), targets)``.
 
     Parameters
     ----------
@@ -93,7 +90,7 @@ def settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[
     Returns
     -------
     dict
-        ``stop_on``, ``hold_for``, ``min_stop_cases`` and one dict per criterion.
+        As ``criteria``.
 
     Raises
     ------
@@ -101,8 +98,35 @@ def settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[
         If the section does not match the schema, or a tolerance names a target not in `targets`;
         the message names the key.
     """
-    conv = checked("converge", cfg)
-    out = {key: conv[key] for key in ("stop_on", "hold_for", "min_stop_cases", *CRITERIA)}
+    return criteria(checked("converge", cfg), targets)
+
+
+def criteria(conv: Mapping, targets: Sequence[str] | None = None) -> dict[str, Any]:
+    """The criteria's settings picked from a ``converge:`` section whose defaults are filled
+    (``spreadmap.schema.checked``, done once by the caller: ``stepper.step_settings``).
+
+    The one reader of the criteria's keys (``stop_on``, ``hold_for``, ``min_stop_cases``, ``map_error``, ``cv_rmse``,
+    ``map_change``, ``ci``); their defaults are the schema's alone, and the schema refuses unknown
+    criteria, statistics and keys. A CI half-width of null drops that statistic from the criterion.
+
+    Parameters
+    ----------
+    conv : Mapping
+        The ``converge:`` section as ``checked("converge", ...)`` returns it.
+    targets : sequence of str or None, optional
+        The loop's targets: a map-error tolerance for any other target is refused. None: not checked.
+
+    Returns
+    -------
+    dict
+        ``stop_on``, ``hold_for``, ``min_stop_cases`` and one dict per criterion (copies).
+
+    Raises
+    ------
+    ValueError
+        If a tolerance names a target not in `targets`; the message names the key.
+    """
+    out = copy.deepcopy({key: conv[key] for key in ("stop_on", "hold_for", "min_stop_cases", *CRITERIA)})
     out["ci"]["halfwidth"] = {k: v for k, v in out["ci"]["halfwidth"].items() if v is not None}
     unknown = sorted(set(out["map_error"]["tolerance"]) - set(targets)) if targets is not None else []
     if unknown:
@@ -274,7 +298,7 @@ def map_statistics(model: MapModel, box: np.ndarray, draws: int = 64, seed: int 
 # ----------------------------------------------------------------------------------------------
 def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = TARGETS,
              prev_table: pd.DataFrame | None = None, grids: Mapping[str, np.ndarray] | None = None,
-             cfg: Mapping | None = None, seed: int = 0,
+             crit: Mapping | None = None, seed: int = 0,
              floors: Mapping[str, float] | None = None,
              stats_table: pd.DataFrame | None = None) -> dict[str, Any]:
     """The three criteria on the cases of ``table`` (and the previous batch's ``prev_table``).
@@ -285,9 +309,10 @@ def evaluate(table: pd.DataFrame, fit: FitFunction, targets: Sequence[str] = TAR
     ``stats_table``: the cases whose statistics the CIs are about and whose cross-validated
     predictions the CV RMSE scores (default ``table``; with active batches, the LDS cases only:
     the others are not a uniform sample of the design space). Its rows must be rows of ``table``
-    (the same index).
+    (the same index). ``crit``: the criteria's settings (``settings`` or ``criteria``; None: the
+    schema's defaults).
     """
-    s = settings(cfg)
+    s = crit if crit is not None else settings(None)
     if stats_table is not None and not (table.index.is_unique and stats_table.index.isin(table.index).all()):
         raise ValueError("stats_table must be rows of table (a subset of its unique index)")
     grids = grids if grids is not None else map_grids(box_k=int(s["map_change"]["box_k"]))

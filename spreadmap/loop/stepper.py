@@ -50,10 +50,11 @@ from .model import FitFunction, make_map_fit
 
 def step_settings(cfg: Mapping | None, targets: Sequence[str] | None = None) -> dict[str, Any]:
     """The ``converge:`` section with the schema's defaults filled (``spreadmap.schema.checked``;
-    a partial section is completed, an unknown key or value refused) and, under ``criteria``, the
-    map criteria's settings (``map_criteria.settings``, which checks the tolerances' targets)."""
+    a partial section is completed, an unknown key or value refused), once for the whole step, and,
+    under ``criteria``, the map criteria's settings picked from it (``map_criteria.criteria``, which
+    checks the tolerances' targets)."""
     out = checked("converge", cfg)
-    out["criteria"] = map_criteria.settings(out, targets)
+    out["criteria"] = map_criteria.criteria(out, targets)
     return out
 
 
@@ -161,7 +162,7 @@ def step(table: pd.DataFrame, n: int, cfg: Mapping | None, prev_step: Mapping | 
         raise ValueError(f"the previous step lists {len(is_lds)} cases, the table has {n}")
     lds_table = table[np.asarray(is_lds, bool)]
     result = map_criteria.evaluate(table, fit, targets, None if n_prev is None else table.iloc[:n_prev],
-                                   grids, cfg, seed=0, floors=floors, stats_table=lds_table)
+                                   grids, crit, seed=0, floors=floors, stats_table=lds_table)
     if models_out is not None:
         models_out.update(result["models"])
     tracker = map_criteria.Tracker(crit["stop_on"], crit["hold_for"],

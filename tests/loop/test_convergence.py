@@ -488,13 +488,14 @@ def test_the_cv_criterion_scores_the_stats_tables_rows_of_the_table():
     t = _noisy_table(u, 0.01, 1)
     cfg = {"cv_rmse": {"folds": 3}, "ci": {"resamples": 100}}
     fit = mm.make_map_fit()
-    whole = mc.evaluate(t, fit, ("mfr",), cfg=cfg)["cv_rmse"]["targets"]["mfr"]
-    share = mc.evaluate(t, fit, ("mfr",), cfg=cfg, stats_table=t.iloc[:24])["cv_rmse"]["targets"]["mfr"]
+    whole = mc.evaluate(t, fit, ("mfr",), crit=mc.settings(cfg))["cv_rmse"]["targets"]["mfr"]
+    share = mc.evaluate(t, fit, ("mfr",), crit=mc.settings(cfg), stats_table=t.iloc[:24])["cv_rmse"]["targets"]["mfr"]
     assert whole["scored"] == "all cases" and whole["n_scored"] == 48
     assert share["scored"] == "the LDS share" and share["n_scored"] == 24
     assert share["rmse_all_cases"] == pytest.approx(whole["rmse"])  # the same folds and models
     with pytest.raises(ValueError, match="rows of table"):
-        mc.evaluate(t, fit, ("mfr",), cfg=cfg, stats_table=t.iloc[:24].reset_index(drop=True).set_axis(range(100, 124)))
+        mc.evaluate(t, fit, ("mfr",), crit=mc.settings(cfg),
+                    stats_table=t.iloc[:24].reset_index(drop=True).set_axis(range(100, 124)))
 
 
 def test_map_change_is_the_shift_of_the_data():
@@ -552,10 +553,10 @@ def test_ci_widths_relative_to_value_and_floor():
 def test_criteria_hold_with_many_cases_and_not_with_few():
     cfg = {"cv_rmse": {"folds": 3},
            "ci": {"resamples": 300, "halfwidth": {"std": 0.15, "kurtosis": None, "skewness": None}}}
-    few = mc.evaluate(_noisy_table(halton_unit(12, 4), 0.01, 3), mm.make_map_fit(), ("mfr",), cfg=cfg,
+    few = mc.evaluate(_noisy_table(halton_unit(12, 4), 0.01, 3), mm.make_map_fit(), ("mfr",), crit=mc.settings(cfg),
                       grids=mc.map_grids(box_k=3))
     many_t = _noisy_table(halton_unit(96, 4), 0.01, 3)
-    many = mc.evaluate(many_t, mm.make_map_fit(), ("mfr",), prev_table=many_t.iloc[:80], cfg=cfg,
+    many = mc.evaluate(many_t, mm.make_map_fit(), ("mfr",), prev_table=many_t.iloc[:80], crit=mc.settings(cfg),
                        grids=mc.map_grids(box_k=3))
     assert few["map_change"] is None  # nothing to compare with
     assert not few["ci"]["holds"]  # SD of 12 values: half-width ~ 1.645 / sqrt(24) = 0.34 > 0.15
@@ -904,16 +905,16 @@ def test_map_error_two_ways_against_a_known_truth():
     true = max(np.sqrt(np.mean((model.predict(g) - _smooth(to_unit(g))) ** 2)) for g in grids.values())
     loose = {"cv_rmse": {"folds": 4}, "ci": {"resamples": 100}, "map_error": {"tolerance": {"mfr": 3 * true}, "draws": 8}}
     tight = {**loose, "map_error": {"tolerance": {"mfr": true / 3}, "draws": 8}}
-    res = mc.evaluate(t, fit, ("mfr",), grids=grids, cfg=loose)
+    res = mc.evaluate(t, fit, ("mfr",), grids=grids, crit=mc.settings(loose))
     me = res["map_error"]["targets"]["mfr"]
     assert 0.5 * true < me["posterior_rms_sd"]["worst"] < 2 * true
     assert me["cv_net_of_noise"] < 2 * true
     assert me["estimate"] == max(me["cv_net_of_noise"], me["posterior_rms_sd"]["worst"])
     assert res["map_error"]["holds"]
-    assert not mc.evaluate(t, fit, ("mfr",), grids=grids, cfg=tight)["map_error"]["holds"]
+    assert not mc.evaluate(t, fit, ("mfr",), grids=grids, crit=mc.settings(tight))["map_error"]["holds"]
     few = _noisy_table(halton_unit(12, 8), 0.01, 7).assign(mfr_sd=0.01, pd_sd=0.009)
     at_true = {**loose, "map_error": {"tolerance": {"mfr": true}, "draws": 8}}
-    assert not mc.evaluate(few, fit, ("mfr",), grids=grids, cfg=at_true)["map_error"]["holds"]
+    assert not mc.evaluate(few, fit, ("mfr",), grids=grids, crit=mc.settings(at_true))["map_error"]["holds"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -998,3 +999,28 @@ def test_replay_stops_and_honesty_on_a_constructed_path():
     late = replay.stops(paths, {"mfr": 0.0125, "pd": 0.0125}, min_cases=64)
     assert (late["n"] == 64).all() and late["true_within"].all()
     assert replay.calibrate_margin(paths, [0.0125], share=0.95, min_cases=64) == 1.0
+
+
+def test_a_step_fills_the_converge_section_once_and_reads_the_tolerance_from_it(monkeypatch):
+    """The map tolerance's path (issue 52): one step fills `converge:`'s defaults once
+    (stepper.step_settings, schema.checked), picks the criteria from that (map_criteria.criteria),
+    and the criteria read the tolerance given there; no other fill of the section on the way."""
+    from spreadmap import schema
+    from spreadmap.loop import map_criteria
+
+    sections = []
+
+    def counting(section, cfg=None):
+        sections.append(section)
+        return schema.checked(section, cfg)
+
+    monkeypatch.setattr(stepper, "checked", counting)
+    monkeypatch.setattr(map_criteria, "checked", counting)
+    tab = _noisy_table(halton_unit(24, 42), 0.01, 3)
+    tab["status"], tab["flagged"], tab["cpu_time"] = "ok", False, 30.0
+    cfg = {**FAST, "start": 24, "batch": 8, "budget": 64, "map_error": {"tolerance": {"mfr": 0.123}, "draws": 0}}
+    rec = stepper.step(tab, 24, cfg, None, maps_cfg={"machine": {"n_h": 3, "n_v": 3}}, cost=_plan_cost)
+    assert sections.count("converge") == 1, sections
+    got = rec["criteria"]["at_this_batch"]["map_error"]["targets"]
+    default_pd = schema.checked("converge")["map_error"]["tolerance"]["pd"]
+    assert got["mfr"]["tolerance"] == 0.123 and got["pd"]["tolerance"] == default_pd
