@@ -8,11 +8,10 @@ import warnings
 from pathlib import Path
 
 import jsonschema
-import yaml
 
 # the schema, a section of it and a section checked alone live in spreadmap.schema (the ground
 # floor every module may read); this module validates a whole config, cross-keys included
-from .schema import SCHEMA, checked, section_schema  # noqa: F401  (re-exported)
+from .schema import SCHEMA, checked, read_yaml, section_schema  # noqa: F401  (re-exported)
 from .targets import RENAMED as RENAMED_TARGETS
 
 
@@ -276,7 +275,7 @@ def validate(config: dict, schema_path: Path | str = SCHEMA) -> dict:
     try:
         snakemake_validate(config, str(schema_path), set_default=True)
     except WorkflowError:
-        schema = yaml.safe_load(Path(schema_path).read_text())
+        schema = read_yaml(Path(schema_path).read_text())
         validator = jsonschema.Draft202012Validator(schema)
         error = jsonschema.exceptions.best_match(validator.iter_errors(config))
         raise ConfigError(_describe(error) if error else "config does not match its schema") from None
@@ -367,5 +366,5 @@ def load(path: Path | str) -> dict:
         If the config is not valid (``validate``).
     """
     with open(path) as fh:
-        config = yaml.safe_load(fh) or {}
+        config = read_yaml(fh.read()) or {}
     return validate(copy.deepcopy(config))
