@@ -11,7 +11,9 @@ from conftest import FAST_SWEEP, deep_update, make_workflow, planned_jobs, snake
 pytestmark = pytest.mark.yade
 
 SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
-    "sweeps": {"lds": {"seed": 42, "partitions": [6, 12]}, "lattice": {"k": [2]}},
+    # the LDS sweep's 8 cases are the converge run's 8 LDS cases (the start's 4 and one or two of
+    # each batch of 2: one LDS sequence, seed 42), re-used, not run again
+    "sweeps": {"lds": {"seed": 42, "partitions": [4, 8]}, "lattice": {"k": [2]}},
     "ranges": {"d_um": {"min": 40, "max": 50}, "f": {"min": 0.3, "max": 0.45}},
     "points": {"named": {"demo": {"f": 0.3, "d_um": 45.0, "h_um": 65.0, "v_mm_s": 10.0}}},
     "pictures": {"cases": ["demo"], "vtk": ["demo"]},
@@ -37,6 +39,8 @@ def finished_run(tmp_path_factory):
     wf = make_workflow(tmp_path_factory.mktemp("analyses"), SMALL_RUN, drop=("sweeps", "points"))
     run = snakemake(wf, timeout=900)  # the main job: the converge run, its surrogate and maps
     assert run.returncode == 0, (run.stdout + run.stderr)[-5000:]
+    planned = planned_jobs(snakemake(wf, "sweeps", "sampling", "-n").stdout)
+    assert planned["run_case"] == 16, planned  # the lattice's 2^4 alone: the LDS sweep's cases are the loop's
     sweeps = snakemake(wf, "sweeps", "sampling", timeout=900)  # the study's protocol beside it
     assert sweeps.returncode == 0, (sweeps.stdout + sweeps.stderr)[-5000:]
     return wf
@@ -115,7 +119,7 @@ def test_converge_stops_early_when_the_criterion_holds_at_once(finished_run):
     cfg = deep_update(copy.deepcopy(SMALL_RUN), {"converge": {
         "start": 6, "budget": 12, "min_stop_cases": 0, "stop_on": ["cv_rmse", "ci"], "cv_rmse": {"factor": 1000.0},
         "ci": {"halfwidth": {"mean": 1000.0, "std": None, "median": None, "skewness": None, "kurtosis": None}}},
-        "sweeps": {"lds": {"partitions": [6, 12]}}})
+        "sweeps": {"lds": {"partitions": [4, 8]}}})
     write_config(finished_run, cfg, drop=("sweeps", "points"))
     (finished_run / "results" / "converge").exists() and [
         p.unlink() for p in (finished_run / "results" / "converge").glob("*.json")]
@@ -151,7 +155,7 @@ def test_the_study_publishes_and_answers_from_a_finished_run(finished_run, tmp_p
     # every question answered but the held-out check (tools/heldout.py), which this run has not had
     heldout = "## The held-out check (points no sweep ran, predicted before they ran)\n" + NOT_YET
     assert heldout in text and text.count(NOT_YET) == 1, text
-    assert "- lds: 12 of 12 cases finished" in text and "- lattice: 16 of 16 cases finished" in text
+    assert "- lds: 8 of 8 cases finished" in text and "- lattice: 16 of 16 cases finished" in text
     assert "The main job's loop: the map criteria" in text
     assert "The study's rule (five statistics within 0.5 %), lds:" in text
     assert "The study's rule (five statistics within 0.5 %), lattice:" in text

@@ -22,27 +22,27 @@ def raw_files(wf):
     return {p.parent.name: p for p in (wf / "results" / "cases").glob("*/raw.json")}
 
 
-def test_growing_lds_from_4_to_8_runs_exactly_the_4_new_cases(tmp_path):
-    wf = make_workflow(tmp_path, lds_only([4]), DROP)
-    assert planned_jobs(snakemake(wf, "sweeps", "-n").stdout)["run_case"] == 4
+def test_growing_lds_from_3_to_6_runs_exactly_the_3_new_cases(tmp_path):
+    wf = make_workflow(tmp_path, lds_only([3]), DROP)
+    assert planned_jobs(snakemake(wf, "sweeps", "-n").stdout)["run_case"] == 3
     run = snakemake(wf, "sweeps")
     assert run.returncode == 0, run.stderr[-3000:]
     before = {cid: (p.read_bytes(), p.stat().st_mtime_ns) for cid, p in raw_files(wf).items()}
-    assert len(before) == 4
+    assert len(before) == 3
 
-    write_config(wf, lds_only([4, 8]), DROP)
+    write_config(wf, lds_only([3, 6]), DROP)
     dry = snakemake(wf, "sweeps", "-n")
     jobs = planned_jobs(dry.stdout)
-    print("dry run after growing 4 -> 8:", jobs)
-    assert jobs["run_case"] == 4 and jobs["render_case"] == 4
+    print("dry run after growing 3 -> 6:", jobs)
+    assert jobs["run_case"] == 3 and jobs["render_case"] == 3
     run = snakemake(wf, "sweeps")
     assert run.returncode == 0, run.stderr[-3000:]
     after = raw_files(wf)
-    assert len(after) == 8
-    for cid, (data, mtime) in before.items():  # the first four untouched, byte for byte
+    assert len(after) == 6
+    for cid, (data, mtime) in before.items():  # the first three untouched, byte for byte
         assert after[cid].read_bytes() == data and after[cid].stat().st_mtime_ns == mtime
     table = pd.read_csv(wf / "results" / "tables" / "lds.csv")
-    assert list(table["index"]) == list(range(8)) and (table["status"] == "ok").all()
+    assert list(table["index"]) == list(range(6)) and (table["status"] == "ok").all()
     assert planned_jobs(snakemake(wf, "sweeps", "-n").stdout) == {}  # nothing left to do
 
 
