@@ -14,7 +14,9 @@ SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
     # the LDS sweep's 8 cases are the converge run's 8 LDS cases (the start's 4 and one or two of
     # each batch of 2: one LDS sequence, seed 42), re-used, not run again
     "sweeps": {"lds": {"seed": 42, "partitions": [4, 8]}, "lattice": {"k": [2]}},
-    "ranges": {"d_um": {"min": 40, "max": 50}, "f": {"min": 0.3, "max": 0.45}},
+    # blade speeds 10-15 mm/s: a smoke case's move at 5 mm/s is three times the steps of one at
+    # 15, and the lattice's 16 corners and the loop's points are what this fixture's time is
+    "ranges": {"d_um": {"min": 40, "max": 50}, "f": {"min": 0.3, "max": 0.45}, "v_mm_s": {"min": 10, "max": 15}},
     "points": {"named": {"demo": {"f": 0.3, "d_um": 45.0, "h_um": 65.0, "v_mm_s": 10.0}}},
     "pictures": {"cases": ["demo"], "vtk": ["demo"]},
     # the surrogate's validation at its smallest that still chooses inside the folds (two MLP
@@ -22,7 +24,8 @@ SMALL_RUN = deep_update(copy.deepcopy(FAST_SWEEP), {
     "surrogate": {"neurons": [2, 4], "seeds": [0, 1, 2], "cv_folds": 3, "cv_repeats": 1, "gp_restarts": 0,
                   "ensemble_members": 2, "mlp_sizes": [4], "mlp_alphas": [0.1, 1.0]},
     "study_rule": {"sampling_study": {"seeds": 2, "k_max": 4}},
-    "maps": {"sobol_n": 128, "sobol_draws": 8, "machine": {"n_h": 3, "n_v": 3}},
+    "maps": {"sobol_n": 128, "sobol_draws": 8, "machine": {"n_h": 3, "n_v": 3}, "powder": {"v_mm_s": 12.0}},
+    "decisions": {"machine": {"v_mm_s": [10, 15]}},  # the machine's limits inside the ranges above
     # 10 cases: the surrogate's 3-fold validation needs 8 usable, and a smoke case may be flagged
     # (and a tolerance no smoke run reaches: the loop runs to its budget)
     "converge": {"start": 4, "batch": 2, "k_consecutive": 3, "budget": 10,
