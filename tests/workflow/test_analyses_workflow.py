@@ -121,8 +121,7 @@ def test_converge_stops_early_when_the_criterion_holds_at_once(finished_run):
     # thresholds no map can miss: the CV RMSE and the CIs hold at the first step with enough cases
     cfg = deep_update(copy.deepcopy(SMALL_RUN), {"converge": {
         "start": 6, "budget": 12, "min_stop_cases": 0, "stop_on": ["cv_rmse", "ci"], "cv_rmse": {"factor": 1000.0},
-        "ci": {"halfwidth": {"mean": 1000.0, "std": None, "median": None, "skewness": None, "kurtosis": None}}},
-        "sweeps": {"lds": {"partitions": [4, 8]}}})
+        "ci": {"halfwidth": {"mean": 1000.0, "std": None, "median": None, "skewness": None, "kurtosis": None}}}})
     write_config(finished_run, cfg, drop=("sweeps", "points"))
     (finished_run / "results" / "converge").exists() and [
         p.unlink() for p in (finished_run / "results" / "converge").glob("*.json")]

@@ -98,7 +98,8 @@ def test_failed_cases_archived_by_retry_failed_run_again_and_finish(tmp_path):
 
 @pytest.mark.faults
 def test_killed_run_resumes_without_redoing_finished_cases(tmp_path):
-    wf = make_workflow(tmp_path, lds_only([4]), DROP)
+    cases = 4
+    wf = make_workflow(tmp_path, lds_only([cases]), DROP)
     log = open(tmp_path / "killed-run.log", "w")
     proc = subprocess.Popen([SNAKEMAKE, "sweeps", "--cores", "1"], cwd=wf, stdin=subprocess.DEVNULL, stdout=log,
                             stderr=subprocess.STDOUT, start_new_session=True)
@@ -112,17 +113,17 @@ def test_killed_run_resumes_without_redoing_finished_cases(tmp_path):
         proc.wait()
         log.close()
     finished = {cid: p.read_bytes() for cid, p in raw_files(wf).items()}
-    assert 2 <= len(finished) < 4
+    assert 2 <= len(finished) < cases
     dry = planned_jobs(snakemake(wf, "sweeps", "-n").stdout)
     # Snakemake re-plans the unfinished cases, plus any whose YADE run had finished when the kill
     # came but whose job Snakemake had not yet recorded as complete ...
-    assert 4 - len(finished) <= dry["run_case"] <= 4 - len(finished) + 1
+    assert cases - len(finished) <= dry["run_case"] <= cases - len(finished) + 1
     # kill -9 leaves Snakemake's directory lock: the README's resume is --unlock, then run again
     assert snakemake(wf, "--unlock").returncode == 0
     run = snakemake(wf, "sweeps")
     assert run.returncode == 0, (run.stdout + run.stderr)[-6000:]
     after = raw_files(wf)
-    assert len(after) == 4
+    assert len(after) == cases
     # ... but no finished case is simulated again: the raw records (which hold each run's wall
     # time) are byte-identical, and the YADE runs of the resume are only the unfinished ones.
     assert all(after[cid].read_bytes() == data for cid, data in finished.items())
@@ -130,5 +131,5 @@ def test_killed_run_resumes_without_redoing_finished_cases(tmp_path):
     done = [line for line in (run.stdout + run.stderr).splitlines() if ": ok after" in line]
     reused = [line for line in done if "re-used the finished simulation" in line]
     assert len(done) == dry["run_case"]
-    assert len(done) - len(reused) == 4 - len(finished)
+    assert len(done) - len(reused) == cases - len(finished)
 
