@@ -23,7 +23,7 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
 from .. import targets
 from ..design import h_over_d
@@ -103,8 +103,10 @@ def t_normal_score(t: float, dof: int) -> float:
     """
     if math.isnan(t) or dof < 1:
         return math.nan
-    # scipy.stats: the t's upper tail, then the normal's inverse tail (both accurate far out)
-    return math.copysign(float(stats.norm.isf(stats.t.sf(abs(t), dof))), t)
+    # the t's upper tail, then the normal's inverse tail, both accurate far out: the functions
+    # scipy.stats.t.sf and norm.isf call (stdtr(dof, -t) and -ndtri(p); the same to the bit over 140,000
+    # draws), from scipy.special, which every Snakemake start imports in 0.1 s, not scipy.stats' 0.6 s
+    return math.copysign(float(-special.ndtri(special.stdtr(dof, -abs(t)))), t)
 
 
 def flow_trend_batch_z(series, x0: float, x1: float, batches: int) -> tuple[float, int]:
