@@ -181,6 +181,13 @@ class LocalSlurm:
             self.slurmd_port = free_port()
         node = " ".join(f"{k}={v}" for k, v in detected_node().items())
         d = self.dir
+        # ProctrackType pgid: a job's processes are signalled by their process group, as a site's
+        # cgroup tracking reaches them all. With linuxproc (by parent links) a requeued job's
+        # `python -m snakemake` outlived its job once in three runs (2026-12-07). The likely path, not
+        # traced: the batch shell died on the SIGTERM, the snakemake job process (still cleaning up)
+        # became init's child, and the SIGKILL that follows walks the tree from slurmstepd, no longer
+        # reaching it. A process group survives its leader and the re-parenting. (YADE, in a session of
+        # its own, dies with its launcher: spreadmap.case.launcher's pdeathsig.)
         self.conf.write_text(f"""\
 # Written by tests/slurm_localhost.py: a throw-away single-node cluster on 127.0.0.1.
 ClusterName=spreadmap-test
@@ -198,7 +205,7 @@ SlurmctldPidFile={d}/slurmctld.pid
 SlurmdPidFile={d}/slurmd.pid
 SlurmctldLogFile={d}/log/slurmctld.log
 SlurmdLogFile={d}/log/slurmd.log
-ProctrackType=proctrack/linuxproc
+ProctrackType=proctrack/pgid
 TaskPlugin=task/affinity
 JobAcctGatherType=jobacct_gather/none
 AccountingStorageType=accounting_storage/none

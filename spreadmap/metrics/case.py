@@ -157,6 +157,19 @@ def overlap_sampling_factor(params: dict) -> float:
     return 1.0 / math.cos(min(angle, 0.45 * math.pi))
 
 
+def wedge_cause(params: dict) -> str:
+    """Why a wedge went deeper than the bound: with spheres of one size, or a size distribution
+    whose largest sphere passes the gap, no wedge of a sound step goes that deep; when the feed's
+    largest spheres are wider than the gap (a coarse tail, `psd_sizes` [m] against `gap` [m]) it is
+    a jam: such a sphere cannot pass, and the blade, driven at its speed, squeezes it."""
+    sizes = params.get("psd_sizes") or []
+    gap = params.get("gap")
+    if sizes and gap and sizes[-1] > gap:
+        return (f"a jam of the coarse tail (the feed's largest spheres {sizes[-1] * 1e6:.0f} um against a gap of "
+                f"{gap * 1e6:.0f} um: they cannot pass), not a step too long")
+    return "beyond any wedge of a sound step"
+
+
 def flow_fall_reason(trend: float, trend_z: float, heap_end_h2: float, heap_min: float | None) -> str:
     """The flag of a flow that fell over the window, with its cause as far as the heap ahead of the
     blade tells (the text after the last ': ' is the cause the summaries count): a heap that still
@@ -289,7 +302,7 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
     wedge_max = stability.get("max_wedge_overlap_ratio", MAX_WEDGE_OVERLAP)
     if wedge_max is not None and new["peak_overlap_wedged"] * sampling > wedge_max:  # nan (no split) compares False
         flags.append(f"peak overlap {new['peak_overlap_wedged']:.3g} R at spheres the blade presses > {wedge_max} R: "
-                     f"beyond any wedge of a sound step")
+                     + wedge_cause(p))
     z_max = flow_trend_bound(stability)
     heap_min = stability.get("min_heap_h2", MIN_HEAP_H2)
     z = new["flow_trend_z_batch"]

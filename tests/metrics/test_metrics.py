@@ -435,6 +435,24 @@ def test_a_wedge_beyond_its_own_bound_is_flagged(wedged, bound, flagged):
     assert ("at spheres the blade presses" in m["flag_reason"]) is flagged, m["flag_reason"]
 
 
+@pytest.mark.parametrize("largest_um,jam", [(None, False), (50.0, False), (78.0, True)])
+def test_a_deep_wedge_says_whether_the_coarse_tail_jammed(largest_um, jam):
+    """A wedge beyond its bound stays flagged; its reason says a jam when the feed's largest sphere
+    is wider than the gap (spheres 20-78 um at a 55 um gap), and a step too long otherwise."""
+    raw = raw_record(overlap=0.34)
+    raw["peak_overlap_free"], raw["peak_overlap_wedged"] = 0.02, 0.34
+    raw["params"]["gap"] = 55e-6
+    if largest_um is not None:
+        raw["params"]["psd_sizes"] = [20e-6, 45e-6, largest_um * 1e-6]
+        raw["snapshots"]["blade_start"] = raw["snapshots"]["window_start"]  # the feed the counting reads
+    m = case_metrics(raw, RULES, BOUNDS, SETTINGS)
+    assert m["flagged"] and "at spheres the blade presses" in m["flag_reason"]
+    assert ("a jam of the coarse tail" in m["flag_reason"]) is jam, m["flag_reason"]
+    assert ("beyond any wedge of a sound step" in m["flag_reason"]) is not jam
+    if jam:
+        assert "78 um against a gap of 55 um" in m["flag_reason"]
+
+
 def test_a_raw_record_from_before_the_split_counts_its_whole_peak_as_free():
     m = case_metrics(raw_record(overlap=0.09), RULES, BOUNDS, SETTINGS)
     assert m["flagged"] and m["peak_overlap_free"] == 0.09 and math.isnan(m["peak_overlap_wedged"]) and not m["wedged"]
