@@ -10,6 +10,10 @@ Halton cases, MFR spread 0.086, noise SD 0.020): MFR 0.0204 / 0.0228 / 0.0232 an
 0.0196 / 0.0231 at 32 cases for ln(h/d) / raw / h/d; 0.0179 / 0.0184 / 0.0182 and 0.0178 / 0.0182
 / 0.0185 at 128 cases. ln(h/d) is best or tied everywhere (the differences are within the RMSE
 intervals, about +-0.004 at 32 cases); re-check on the main job's table.
+
+The main job's stop rests on this choice: on the adhesive main job's 64 cases (docs/main_job,
+run_2026-12-06b) the loop's own step (spreadmap.loop.recheck.redecide) reads the map error at 0.80
+of its tolerance with ``physics`` (it stopped there) and 1.24 with ``raw``, which would not stop.
 """
 from __future__ import annotations
 
