@@ -59,8 +59,10 @@ def test_a_runs_steps_decided_again_with_its_own_noise_law_reproduce_its_path():
     steps = run_steps(run)[:2]
     table = pd.read_csv(run / "cases.csv")
     cfg = spreadmap_config.load(ROOT / "config.yaml")
-    # the stop rule as the run ran it (config.yaml's now: margin 1.0, stops from 64 cases; docs/replay/adhesive)
+    # the stop rule and batches as the run ran them (config.yaml's now: margin 1.0, batches of 8, stops
+    # from 56 cases; docs/replay/adhesive)
     cfg["converge"]["map_error"]["margin"], cfg["converge"]["min_stop_cases"] = 1.7, 0
+    cfg["converge"]["batch"] = 16
     law = steps[0]["noise_model"]
     again = recheck_path(table, cfg, steps, law)
     for mine, published in zip(again, steps):
