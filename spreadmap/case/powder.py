@@ -47,7 +47,7 @@ def powder_label(config: dict) -> str:
     str
         'dry spheres (no adhesion)' or 'adhesive spheres (DMT, surface energy 0.1 mJ/m^2; Bond number
         77 at d = 10 um to 3.1 at 50 um)', followed for a size distribution (span > 0) by
-        ', sizes log-normal by volume (span 1, cut at D5-D95; d is the D50)'.
+        ', sizes log-normal by volume (span 1, cut at D1-D99; d is the D50)'.
     """
     material = config["material"]
     return _adhesion_label(config) + _size_label(material.get("size_distribution") or {})
