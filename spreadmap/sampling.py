@@ -15,15 +15,13 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.stats import qmc
 
 from .design import NAMES, Design, to_physical
 
 
 def halton_unit(n: int, seed: int) -> np.ndarray:
     """The first n points of the seeded scrambled Halton sequence in [0, 1)^4."""
-    from scipy.stats import qmc  # here, not at the top: scipy.stats takes ~0.6 s to import, and every
-    # Snakemake start reads this module (rules/common.smk) without needing a sequence
-
     return qmc.Halton(d=len(NAMES), scramble=True, seed=seed).random(n)
 
 
