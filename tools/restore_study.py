@@ -26,12 +26,11 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
 from spreadmap.files import atomic_path
 from spreadmap.study.checksums import PublishedFileError, verified_bytes
-from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps
+from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps, restore_time
 
 
 def write_bytes_atomically(path: Path, data: bytes) -> None:
@@ -61,8 +60,9 @@ def main(argv=None) -> int:
     except PublishedFileError as error:
         print(f"restore_study: refused: {error}", file=sys.stderr)
         return 2
-    # an hour in the past, so that anything the resumed run makes is newer
-    base = time.time() - 3600
+    # an hour in the past, so that anything the resumed run makes is newer, but newer than the
+    # workflow's code (a fresh clone dates it now, and Snakemake re-runs what is older than its script)
+    base = restore_time(args.workdir)
     try:  # refused before anything is written: a table whose cases' scene is not known
         counts = restore_cases(tables, args.workdir, mtime=base)
     except UnkeyedTableError as error:

@@ -26,6 +26,7 @@ import json
 import math
 import os
 import re
+import time
 from pathlib import Path
 
 import pandas as pd
@@ -97,6 +98,37 @@ def readable_metrics(path: Path) -> bool:
     except (FileNotFoundError, CorruptFileError):
         return False
     return True
+
+
+WORKFLOW_CODE = ("Snakefile", "rules", "scripts")  # what Snakemake dates a job's outputs against
+
+
+def restore_time(workdir: Path | str, now: float | None = None) -> float:
+    """The modification time to give restored files: an hour before `now` (so that what a resumed
+    run makes is newer), but newer than the workflow's own code (Snakefile, rules/, scripts/).
+
+    Snakemake re-runs a job whose outputs are older than its script (its `code` trigger compares
+    the dates), and a fresh `git clone` dates every file at the clone: restored an hour back, every
+    restored case's metrics job would run again, and fail for want of the raw record.
+
+    Parameters
+    ----------
+    workdir : pathlib.Path or str
+        The workflow directory restored into.
+    now : float or None, optional
+        The time [s since the epoch]; None: the clock's.
+
+    Returns
+    -------
+    float
+        The time [s since the epoch]: at most `now`.
+    """
+    now = time.time() if now is None else float(now)
+    root = Path(workdir)
+    files = [root / name for name in WORKFLOW_CODE if (root / name).is_file()]
+    files += [p for name in WORKFLOW_CODE if (root / name).is_dir() for p in (root / name).rglob("*") if p.is_file()]
+    newest = max((p.stat().st_mtime for p in files), default=0.0)
+    return min(now, max(now - 3600.0, newest + 1.0))
 
 
 def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -> dict:

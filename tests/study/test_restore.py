@@ -22,7 +22,7 @@ from spreadmap import config as spreadmap_config
 from spreadmap.case.identity import readable_part
 from spreadmap.records import current_columns
 from spreadmap.study.checksums import write_manifest
-from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps
+from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps, restore_time
 from spreadmap.table import build_table
 
 STUDY = ROOT / "docs" / "study"
@@ -124,6 +124,8 @@ def test_snakemake_plans_no_run_for_a_restored_case(tmp_path):
     table published under the same config and template, none does and the table is rebuilt from
     them (the tool, as the README's resuming section calls it)."""
     wf = _lds16(tmp_path)
+    for path in [wf / "Snakefile", *(wf / "rules").rglob("*"), *(wf / "scripts").rglob("*")]:
+        os.utime(path)  # dated now, as a fresh git clone dates them: the restored files must be newer
     before = snakemake(wf, "-n", "results/tables/lds.csv")
     assert before.returncode == 0, before.stderr[-3000:]
     assert planned_jobs(before.stdout)["run_case"] == 16
@@ -136,6 +138,21 @@ def test_snakemake_plans_no_run_for_a_restored_case(tmp_path):
     assert after.returncode == 0, after.stderr[-3000:]
     jobs = planned_jobs(after.stdout)
     assert "run_case" not in jobs and "render_case" not in jobs and jobs["results_table"] == 1, after.stdout[-2000:]
+    # nor a restored case's metrics (Snakemake re-runs a job whose outputs are older than its script)
+    assert "case_metrics" not in jobs, after.stdout[-2000:]
+
+
+def test_restored_files_are_dated_after_the_workflow_code(tmp_path):
+    """An hour back, but never older than the Snakefile, rules/ or scripts/ (spreadmap.study.restore's
+    restore_time): a fresh clone dates its code at the clone."""
+    (tmp_path / "scripts").mkdir()
+    (tmp_path / "scripts" / "x.py").write_text("")
+    os.utime(tmp_path / "scripts" / "x.py", (5000.0, 5000.0))
+    assert restore_time(tmp_path, now=10000.0) == 6400.0  # an hour back: newer than the code
+    os.utime(tmp_path / "scripts" / "x.py", (9000.0, 9000.0))
+    assert restore_time(tmp_path, now=10000.0) == 9001.0  # just after the code
+    os.utime(tmp_path / "scripts" / "x.py", (20000.0, 20000.0))
+    assert restore_time(tmp_path, now=10000.0) == 10000.0  # never in the future
 
 
 def test_a_case_published_for_another_scene_is_never_taken_for_this_one(tmp_path):

@@ -15,13 +15,12 @@ import json
 import os
 import re
 import shutil
-import time
 
 import pytest
 from conftest import FAST_SWEEP, ROOT, deep_update, make_workflow, planned_jobs, snakemake, write_config
 
 from spreadmap.study.checksums import write_manifest
-from spreadmap.study.restore import restore_cases
+from spreadmap.study.restore import restore_cases, restore_time
 
 pytestmark = pytest.mark.yade
 
@@ -69,7 +68,7 @@ def simulated(wf) -> set[str]:
 def finished_run(tmp_path_factory):
     wf = make_workflow(tmp_path_factory.mktemp("analyses"), SMALL_RUN, drop=("sweeps", "points"))
     if not REPUBLISH:
-        restore_cases(sorted(PUBLISHED.glob("cases_*.csv")), wf, mtime=time.time() - 3600)
+        restore_cases(sorted(PUBLISHED.glob("cases_*.csv")), wf, mtime=restore_time(wf))
     run = snakemake(wf, timeout=900)  # the main job: the converge run, its surrogate and maps
     assert run.returncode == 0, (run.stdout + run.stderr)[-5000:]
     planned = planned_jobs(snakemake(wf, "sweeps", "sampling", "-n").stdout)
