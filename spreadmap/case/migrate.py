@@ -177,10 +177,13 @@ def with_todays_stride(params: dict) -> dict:
     """The parameters with today's overlap stride (spreadmap.case.scene.overlap_stride): a case that
     read the peak overlap more often (every step, before issue 50) simulated the same spheres to the
     bit (benchmarks/overlap_stride.py) and held its stability check to the per-step record, at least
-    as strict; records without the stride are returned as they are."""
+    as strict; records without the stride are returned as they are. The stride is never made finer
+    than the record's: a case cannot be carried to a read it did not make, and a preset may read
+    less often than a quarter contact (the tests' `smoke`, overlap_reads_per_contact 3)."""
     if "overlap_every" not in params or "contact_time" not in params:
         return params
-    return {**params, "overlap_every": overlap_stride(params["contact_time"], params["time_step"])}
+    today = overlap_stride(params["contact_time"], params["time_step"])
+    return {**params, "overlap_every": max(int(params["overlap_every"]), today)}
 
 
 def carry_to_current_template(cases_dir: Path | str, dry_run: bool = False,
