@@ -28,15 +28,19 @@ from pathlib import Path
 import numpy as np
 
 from spreadmap import config as spreadmap_config
-from spreadmap.case.scene import scene_parameters
+from spreadmap.case.scene import scene_parameters, standing_reserve_h2
 from spreadmap.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap.files import write_text_atomically
 from spreadmap.loop.cost import PlannedCost
 
 ROOT = Path(__file__).resolve().parent.parent
-POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0), "corner": (0.30, 12.0, 70.0, 10.0)}
+POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0), "corner": (0.30, 12.0, 70.0, 10.0),
+          # 2026-12-07: two points the sweep had not seen, for the reserve in d^2 (arm rough_d40)
+          "mid": (0.30, 16.0, 69.0, 10.0), "mid_f45": (0.45, 14.0, 70.0, 10.0)}
 RESERVES = (1.5, 3.0, 4.7, 9.4)
-ARMS = {f"{floor}_r{r:g}": (floor, r) for floor in ("rough", "flat") for r in RESERVES}
+# arm -> (floor, reserve [h^2, the most], reserve [d^2] or None: scene.pile_reserve_d2)
+ARMS = {f"{floor}_r{r:g}": (floor, r, None) for floor in ("rough", "flat") for r in RESERVES}
+ARMS["rough_d40"] = ("rough", 4.7, 40.0)  # 40 d^2, between 1.5 and 4.7 h^2
 REFERENCE_ARM = "rough_r4.7"
 COLUMNS = ("arm", "floor", "pile_reserve", "point", "seed", "case_id", "f", "d_um", "h_um", "v_mm_s", "status",
            "flagged", "flag_reason", "regime", "mfr", "pd", "mfr_sd", "pd_sd", "n_passed", "coverage",
@@ -47,10 +51,11 @@ COLUMNS = ("arm", "floor", "pile_reserve", "point", "seed", "case_id", "f", "d_u
 
 def arm_config(base: dict, arm: str) -> dict:
     """The config of an arm: the shipped one with its floor and heap reserve set."""
-    floor, reserve = ARMS[arm]
+    floor, reserve, per_d2 = ARMS[arm]
     cfg = copy.deepcopy(base)
     cfg["scene"]["substrate"]["kind"] = floor
     cfg["scene"]["pile_reserve"] = reserve
+    cfg["scene"]["pile_reserve_d2"] = per_d2
     return cfg
 
 
@@ -60,10 +65,11 @@ def point_dict(name: str) -> dict:
 
 
 def run_one(job: dict) -> dict:
-    row, params = run_arm_case(arm_config(job["base"], job["arm"]), "default", point_dict(job["point"]), job["seed"],
-                               job["keep"], COLUMNS)
-    floor, reserve = ARMS[job["arm"]]
-    row.update({"arm": job["arm"], "point": job["point"], "floor": floor, "pile_reserve": reserve})
+    cfg = arm_config(job["base"], job["arm"])
+    row, params = run_arm_case(cfg, "default", point_dict(job["point"]), job["seed"], job["keep"], COLUMNS)
+    f, d, h, v = POINTS[job["point"]]
+    row.update({"arm": job["arm"], "point": job["point"], "floor": ARMS[job["arm"]][0],
+                "pile_reserve": round(standing_reserve_h2(cfg["scene"], d, h), 4)})  # the reserve it ran [h^2]
     return row
 
 
@@ -119,19 +125,26 @@ def figure(rows: list[dict], path: Path) -> None:
 
     good = [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.8), constrained_layout=True)
-    colours = {"thin": "tab:blue", "wide": "tab:orange", "corner": "tab:green"}
+    colours = {"thin": "tab:blue", "wide": "tab:orange", "corner": "tab:green", "mid": "tab:red", "mid_f45": "tab:purple"}
     for ax, key in zip(axes, ("mfr", "pd")):
         for point, colour in colours.items():
             for floor, style in (("rough", "-o"), ("flat", "--s")):
                 xs, ms, ses = [], [], []
-                for r in RESERVES:
+                ran = sorted({number(row["pile_reserve"]) for row in good if row["point"] == point and row["floor"] == floor})
+                for r in ran:
                     y = np.array([number(row[key]) for row in good if row["point"] == point
                                   and row["floor"] == floor and number(row["pile_reserve"]) == r])
                     if len(y) >= 2:
                         xs.append(r), ms.append(y.mean()), ses.append(y.std(ddof=1) / np.sqrt(len(y)))
                 if xs:
+                    f, d, h, _ = POINTS[point]
                     ax.errorbar(xs, ms, yerr=ses, fmt=style, color=colour, capsize=3, ms=4,
-                                label=f"{point} (h/d {POINTS[point][2] / POINTS[point][1]:.1f}), {floor} floor")
+                                label=f"{point} (f {f:g}, h/d {h / d:.1f}), {floor} floor")
+                    if floor == "rough" and point in ("mid", "mid_f45", "corner"):  # 40 d^2 (scene.pile_reserve_d2)
+                        rule = min(4.7, max(1.5, 40.0 * (d / h) ** 2))
+                        at = [m for x, m in zip(xs, ms) if abs(x - rule) < 1e-3]
+                        if at:
+                            ax.plot([rule], at, marker="*", ms=13, color=colour, ls="none", mec="k", mew=0.6)
         ax.axvline(4.7, color="grey", lw=0.8, ls=":")
         ax.set_xscale("log", base=2)
         ax.set_xticks(RESERVES, [f"{r:g}" for r in RESERVES])
@@ -140,7 +153,7 @@ def figure(rows: list[dict], path: Path) -> None:
         ax.grid(alpha=0.3)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8)
-    fig.suptitle("Does the heap decide the answer? (adhesive default scene, default preset; dotted: shipped 4.7)")
+    fig.suptitle("Does the heap decide the answer? (adhesive default scene, default preset; dotted: 4.7 h^2; star: 40 d^2)")
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -99,6 +99,8 @@ def main(argv=None) -> int:
                          "heap) or shipped (the config's as it is, e.g. a main job run since the fed heap)")
     ap.add_argument("--config", type=Path, default=ROOT / "config.yaml")
     ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="replay seeds first-seed .. first-seed + seeds - 1 (fresh seeds for a judgement)")
     ap.add_argument("--max-cases", type=int, default=160)
     ap.add_argument("--max-cpu-h", type=float, default=None)
     ap.add_argument("--designs", nargs="*", default=[d["name"] for d in replay.DESIGNS])
@@ -148,7 +150,8 @@ def main(argv=None) -> int:
     done = pd.read_csv(paths_file) if paths_file.exists() else pd.DataFrame(columns=["design", "seed"])
     have = set(zip(done["design"], done["seed"]))
     designs = [d for d in replay.DESIGNS if d["name"] in a.designs]
-    todo = [(d, s, a.max_cases, a.max_cpu_h) for d in designs for s in range(a.seeds) if (d["name"], s) not in have]
+    seeds = range(a.first_seed, a.first_seed + a.seeds)
+    todo = [(d, s, a.max_cases, a.max_cpu_h) for d in designs for s in seeds if (d["name"], s) not in have]
     print(f"{len(todo)} replays to run ({len(have)} reused), {a.jobs} processes")
     t0 = time.time()
     parts = [done] if len(done) else []
@@ -168,11 +171,12 @@ def main(argv=None) -> int:
     half = a.seeds // 2 if a.calibration_seeds is None else a.calibration_seeds
     if not 0 < half < a.seeds:
         raise SystemExit(f"--calibration-seeds: value {half} must be between 1 and --seeds - 1 ({a.seeds - 1})")
-    calib, test = paths[paths["seed"] < half], paths[paths["seed"] >= half]
+    calib, test = paths[paths["seed"] < a.first_seed + half], paths[paths["seed"] >= a.first_seed + half]
     min_cases = (int(config["converge"].get("min_stop_cases") or 0) if a.min_stop_cases is None
                  else a.min_stop_cases)
     margin = replay.calibrate_margin(calib, a.calibrate_on, min_cases=min_cases)
-    print(f"margin calibrated on seeds 0-{half - 1} at tolerances {a.calibrate_on}, stops from {min_cases} cases: "
+    calib_seeds = f"{a.first_seed}-{a.first_seed + half - 1}"
+    print(f"margin calibrated on seeds {calib_seeds} at tolerances {a.calibrate_on}, stops from {min_cases} cases: "
           f"{margin} (the smallest that makes 90 % of their stops, pooled over the designs, honest)")
     all_stops, all_honesty = [], []
     for rule, m, frame in (("bare estimate", 1.0, paths), (f"x{margin:g} (held-out seeds)", margin, test)):
@@ -195,8 +199,9 @@ def main(argv=None) -> int:
     plot_replay(paths, hon, a.out / "replay")
     write_text_atomically(a.out / "summary.md", summary_markdown(paths, hon, margin, law))
     meta = {"command": "benchmarks/replay.py " + " ".join(argv if argv is not None else sys.argv[1:]),
-            "margin": margin, "margin_calibrated_on_seeds": f"0-{half - 1}", "min_stop_cases": min_cases,
-            "margin_calibrated_at_tolerances": a.calibrate_on, "seeds": a.seeds, "max_cases": a.max_cases,
+            "margin": margin, "margin_calibrated_on_seeds": calib_seeds, "min_stop_cases": min_cases,
+            "margin_calibrated_at_tolerances": a.calibrate_on, "seeds": a.seeds, "first_seed": a.first_seed,
+            "max_cases": a.max_cases,
             "designs": a.designs, "tolerances": a.tolerances,
             "replays": int(paths.groupby(["design", "seed"]).ngroups),
             "replay_cpu_s_total": float(paths.groupby(["design", "seed"])["replay_cpu_s"].first().sum())

@@ -93,6 +93,33 @@ def time_step(diameter: float, density: float, material: dict, preset: dict, pre
     return forced, critical
 
 
+def standing_reserve_h2(scene: dict, d: float, h: float) -> float:
+    """The fed heap's standing reserve at a design point, in units of h^2 of bulk powder.
+
+    ``scene.pile_reserve`` x h^2, or with ``scene.pile_reserve_d2`` set, that many d^2 kept between
+    ``scene.pile_reserve_min`` and ``scene.pile_reserve`` h^2 (docs/heap_size: at h/d 3.5 the heap
+    decided MFR below ~20 d^2 and not from 37 d^2 on; at h/d 5.8 1.5 h^2, 50 d^2, read as 4.7 h^2).
+
+    Parameters
+    ----------
+    scene : dict
+        The config's ``scene`` section.
+    d, h : float
+        The sphere diameter (the D50) and the gap [m].
+
+    Returns
+    -------
+    float
+        The reserve [h^2].
+    """
+    most = float(scene["pile_reserve"])
+    per_d2 = scene.get("pile_reserve_d2")
+    if per_d2 is None:
+        return most
+    least = min(float(scene["pile_reserve_min"]), most)
+    return min(most, max(least, float(per_d2) * (d / h) ** 2))
+
+
 def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, seed: int | None = None) -> dict:
     """The PARAMS dict of the YADE scene script for design point `point` at preset `preset_name`.
 
@@ -165,10 +192,11 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # the heap falls below the standing reserve, so the pile holds only what passes before the
     # window opens plus that reserve; the window's own consumption is fed, not piled.
     fed = bool(scene.get("fed_heap", False))
+    reserve = standing_reserve_h2(scene, d, h)
     if target is None:
         need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + (0.0 if fed else window) + blade)
         if fed:  # the pile starts with the heap it will be fed to hold (a smaller one would be fed at once)
-            need += scene["pile_reserve"] * h * h * packing * heap / (h + heap)
+            need += reserve * h * h * packing * heap / (h + heap)
         window_cap = window
         window_expected = window
     else:
@@ -183,12 +211,12 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # ... plus a standing heap that is never meant to pass: the flow under the blade stays
         # steady only while the heap ahead of it is tall against the gap, a wedge at the angle of
         # repose whose area grows as h^2 (docs/precision: a pile of what passes x 1.5 at h/d = 7.5
-        # fed a flow that fell from 0.5 to 0.1 within the window). Its area is pile_reserve x h^2.
-        need += scene["pile_reserve"] * h * h * packing * heap / (h + heap)
+        # fed a flow that fell from 0.5 to 0.1 within the window). Its area is `reserve` x h^2.
+        need += reserve * h * h * packing * heap / (h + heap)
     pile_length = max(preset["pile_length_min_d"] * d, need / (packing * heap))
     # the fed heap's size: the standing reserve (pile_reserve x h^2 of bulk powder) plus what fills
     # the gap under the blade, in spheres
-    feed_count = (int(round(packing * width * (scene["pile_reserve"] * h * h + blade * h) / sphere_volume))
+    feed_count = (int(round(packing * width * (reserve * h * h + blade * h) / sphere_volume))
                   if fed else None)
     pile_height = h + heap
     n_particles = int(round(packing * pile_length * width * pile_height / sphere_volume))

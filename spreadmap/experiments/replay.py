@@ -361,4 +361,10 @@ DESIGNS: Sequence[dict] = (
     {"name": "active_per_cpu", "sampling": "active", "acquisition": "ivr_per_cpu"},
     {"name": "active_per_cpu_b8", "sampling": "active", "acquisition": "ivr_per_cpu", "batch": 8},
     {"name": "active_per_cpu_fast", "sampling": "active", "acquisition": "ivr_per_cpu", "preset": "fast"},
+    # issue 50, 2026-12-07: fewer cost-blind cases (the start's LDS and each batch's LDS half hold the
+    # corner's dear cases); batches of 8, judged with stops from 56 cases
+    {"name": "b8_all_active", "sampling": "active", "acquisition": "ivr_per_cpu", "batch": 8, "lds_share": 0.0},
+    {"name": "b8_start24", "sampling": "active", "acquisition": "ivr_per_cpu", "batch": 8, "start": 24},
+    {"name": "b8_start24_all_active", "sampling": "active", "acquisition": "ivr_per_cpu", "batch": 8, "start": 24,
+     "lds_share": 0.0},
 )
