@@ -36,7 +36,10 @@ from spreadmap.loop.cost import PlannedCost
 ROOT = Path(__file__).resolve().parent.parent
 POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0), "corner": (0.30, 12.0, 70.0, 10.0),
           # 2026-12-07: two points the sweep had not seen, for the reserve in d^2 (arm rough_d40)
-          "mid": (0.30, 16.0, 69.0, 10.0), "mid_f45": (0.45, 14.0, 70.0, 10.0)}
+          "mid": (0.30, 16.0, 69.0, 10.0), "mid_f45": (0.45, 14.0, 70.0, 10.0),
+          # the main job's LDS point where 40 d^2 read MFR 0.244 and 4.7 h^2 0.392 (seed 1, 2026-12-07)
+          "low_f": (0.1607, 12.12, 62.494, 12.7047),
+          "mid_f16": (0.16, 16.0, 69.0, 10.0)}  # mid at low friction
 RESERVES = (1.5, 3.0, 4.7, 9.4)
 # arm -> (floor, reserve [h^2, the most], reserve [d^2] or None: scene.pile_reserve_d2)
 ARMS = {f"{floor}_r{r:g}": (floor, r, None) for floor in ("rough", "flat") for r in RESERVES}
@@ -125,7 +128,8 @@ def figure(rows: list[dict], path: Path) -> None:
 
     good = [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.8), constrained_layout=True)
-    colours = {"thin": "tab:blue", "wide": "tab:orange", "corner": "tab:green", "mid": "tab:red", "mid_f45": "tab:purple"}
+    colours = {"thin": "tab:blue", "wide": "tab:orange", "corner": "tab:green", "mid": "tab:red", "mid_f45": "tab:purple",
+               "low_f": "tab:brown", "mid_f16": "tab:pink"}
     for ax, key in zip(axes, ("mfr", "pd")):
         for point, colour in colours.items():
             for floor, style in (("rough", "-o"), ("flat", "--s")):
@@ -140,7 +144,7 @@ def figure(rows: list[dict], path: Path) -> None:
                     f, d, h, _ = POINTS[point]
                     ax.errorbar(xs, ms, yerr=ses, fmt=style, color=colour, capsize=3, ms=4,
                                 label=f"{point} (f {f:g}, h/d {h / d:.1f}), {floor} floor")
-                    if floor == "rough" and point in ("mid", "mid_f45", "corner"):  # 40 d^2 (scene.pile_reserve_d2)
+                    if floor == "rough" and point not in ("thin", "wide"):  # 40 d^2 (scene.pile_reserve_d2)
                         rule = min(4.7, max(1.5, 40.0 * (d / h) ** 2))
                         at = [m for x, m in zip(xs, ms) if abs(x - rule) < 1e-3]
                         if at:
