@@ -97,8 +97,9 @@ def standing_reserve_h2(scene: dict, d: float, h: float) -> float:
     """The fed heap's standing reserve at a design point, in units of h^2 of bulk powder.
 
     ``scene.pile_reserve`` x h^2, or with ``scene.pile_reserve_d2`` set, that many d^2 kept between
-    ``scene.pile_reserve_min`` and ``scene.pile_reserve`` h^2 (docs/heap_size: at h/d 3.5 the heap
-    decided MFR below ~20 d^2 and not from 37 d^2 on; at h/d 5.8 1.5 h^2, 50 d^2, read as 4.7 h^2).
+    ``scene.pile_reserve_min`` and ``scene.pile_reserve`` h^2. The shipped config sets no d^2 heap:
+    40 d^2 read as 4.7 h^2 within +-3 % at f 0.30-0.45, h/d 4.3-5.8, and 35 % low at f 0.16, h/d 5.2
+    (docs/heap_size).
 
     Parameters
     ----------
