@@ -299,6 +299,14 @@ def _stop(docs: Path, day: str) -> dict:
 MAIN_JOB = "docs/main_job/run_2026-12-04/"
 ADHESIVE = "docs/main_job/run_2026-12-06/"
 ADHESIVE_B = "docs/main_job/run_2026-12-06b/"
+ADHESIVE_C = "docs/main_job/run_2026-12-07c/"
+SETUP_C = 44  # s, the set-up before the first job of run_2026-12-07c (the run's log: 08:09:14 -> 08:09:58)
+
+
+def _analyses_written(docs: Path) -> float:
+    """Minutes from the command to the last of the maps, decisions and explorer page (run_2026-12-07c)."""
+    t = _csv(_run(docs, "2026-12-07c") / "timeline.csv")
+    return float(t[t["rule"].isin(["maps", "decide", "explorer"])]["end_min"].max()) + SETUP_C / 60
 
 
 def _batch8_adhesive(docs: Path) -> list[float]:
@@ -323,25 +331,26 @@ CLAIMS: list[Claim] = [
     Claim("front figure: the maps' MFR factor", "`reference` (MFR x{}; the layer fill",
           "docs/fidelity/correction/correction.json: targets.mfr.factor",
           lambda d: [_factor(d, "mfr")["factor"]]),
-    Claim("adhesive main job (recalibrated stop): cases, CPU h", "met its map criteria at {} cases ({} CPU h)",
-          ADHESIVE_B + "stopped.json: n, cpu_hours",
-          lambda d: [_stop(d, "2026-12-06b")["n"], _stop(d, "2026-12-06b")["cpu_hours"]]),
-    Claim("adhesive main job (recalibrated stop): the whole run's minutes", "the surrogate's validation last, {} min",
-          ADHESIVE_B + "timeline.json: wall_s / 60, + the set-up before the first job (63 s, the run's log)",
-          lambda d: [(_json(_run(d, "2026-12-06b") / "timeline.json")["wall_s"] + 63) / 60]),
-    Claim("adhesive main job (recalibrated stop): map error of MFR and PD at the stop, tolerance",
+    Claim("adhesive main job (batches of 8): cases, CPU h", "met its map criteria at {} cases ({} CPU h)",
+          ADHESIVE_C + "stopped.json: n, cpu_hours",
+          lambda d: [_stop(d, "2026-12-07c")["n"], _stop(d, "2026-12-07c")["cpu_hours"]]),
+    Claim("adhesive main job (batches of 8): minutes to the maps, decisions and explorer",
+          "explorer page **{} min** after the",
+          ADHESIVE_C + "timeline.csv: the last end_min of maps, decide, explorer + the set-up (44 s, the run's log)",
+          lambda d: [_analyses_written(d)]),
+    Claim("adhesive main job (batches of 8): the whole run's minutes", "the surrogate's validation last, {} min",
+          ADHESIVE_C + "timeline.json: wall_s / 60, + the set-up before the first job (44 s, the run's log)",
+          lambda d: [(_json(_run(d, "2026-12-07c") / "timeline.json")["wall_s"] + SETUP_C) / 60]),
+    Claim("adhesive main job (batches of 8): map error of MFR and PD at the stop, tolerance",
           "map error MFR {} and PD {} against the {} tolerance",
-          ADHESIVE_B + "stopped.json: criteria.at_this_batch.map_error.targets.*.estimate, tolerance",
+          ADHESIVE_C + "stopped.json: criteria.at_this_batch.map_error.targets.*.estimate, tolerance",
           lambda d: (lambda t: [t["mfr"]["estimate"], t["pd"]["estimate"], t["mfr"]["tolerance"]])(
-              _stop(d, "2026-12-06b")["criteria"]["at_this_batch"]["map_error"]["targets"])),
+              _stop(d, "2026-12-07c")["criteria"]["at_this_batch"]["map_error"]["targets"])),
     Claim("the adhesive replay of the shipped loop: margin, batch, fewest cases, stops honest, stops, replays, 95 % CI",
           "(margin {}, batches of {}, stops from {} cases: {} of {} stops within the tolerance on {} replays, 95 % CI {}-{}",
           "config.yaml converge; docs/replay/adhesive/batch8/stops.csv (design of the config's batch, bare "
           "estimate at its margin): true_within, stopped rows, rows, Clopper-Pearson",
           _batch8_adhesive),
-    Claim("adhesive main job (recalibrated stop): DEM core-minutes", "the DEM cases alone took {} core-minutes",
-          ADHESIVE_B + "timeline.json: DEM_case_s / 60",
-          lambda d: [_json(_run(d, "2026-12-06b") / "timeline.json")["DEM_case_s"] / 60]),
     Claim("adhesive map against `reference`: points, MFR bias (SE), RMS, RMS / tolerance",
           "blind at {} new points run at `reference` (density x100), read MFR {} (SE {}) low, {} RMS, {}x",
           ADHESIVE + "heldout_reference/score.csv (target mfr): rows, mean and SE of error, RMS of error, / the tolerance",
@@ -449,9 +458,10 @@ CLAIMS: list[Claim] = [
           "docs/case_cost/overlap_stride.csv: geometric mean of stride / every_step cpu_time, normal 95 %",
           _overlap_stride),
     Claim("a smaller heap: CPU at the wide point and the corner, MFR shift at the corner",
-          "(`scene.pile_reserve` 3 h^2: {}x the CPU at h/d {}, {}x at h/d {}, but MFR +{}, SE {}, at h/d {};",
-          "docs/heap_size/cases.csv (rough, finished): median cpu_time 3 / 4.7 h^2; corner mean MFR 3 - 4.7 h^2",
-          _heap_size),
+          "a heap of 3 h^2 ({}-{}x the CPU, MFR +{}, SE {}, at h/d {})",
+          "docs/heap_size/cases.csv (rough, finished): median cpu_time 3 / 4.7 h^2 at the corner and the wide point; "
+          "corner mean MFR 3 - 4.7 h^2",
+          lambda d: (lambda v: [v[2], v[0], v[4], v[5], v[6]])(_heap_size(d))),
     Claim("issue 31's benchmark: CPU at the seven points, the corner, over the box",
           "costs {}x the CPU at the seven points ({}-{}), {}x at the corner ({}-{}), **{}x over the box** ({}-{})",
           "docs/case_cost/final_summary.md, final_corner_summary.md (1 / arm-over-shipped); cost_map.json mean_ratio",
