@@ -119,9 +119,10 @@ def summary(rows: list[dict]) -> str:
                        ) + trend_lines(rows)
 
 
-def figure(rows: list[dict], path: Path) -> None:
+def figure(rows: list[dict], path: Path, d2_scene: dict) -> None:
     """MFR and PD against the heap's reserve, a panel per target, a line per point and floor: the
-    seeds' mean and its SE (usable cases), the shipped reserve marked."""
+    seeds' mean and its SE (usable cases), the shipped reserve marked, and where a point's mean lies at
+    the heap `d2_scene` (the config's scene of the arm rough_d40) gives there, a star."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -145,7 +146,7 @@ def figure(rows: list[dict], path: Path) -> None:
                     ax.errorbar(xs, ms, yerr=ses, fmt=style, color=colour, capsize=3, ms=4,
                                 label=f"{point} (f {f:g}, h/d {h / d:.1f}), {floor} floor")
                     if floor == "rough" and point not in ("thin", "wide"):  # 40 d^2 (scene.pile_reserve_d2)
-                        rule = min(4.7, max(1.5, 40.0 * (d / h) ** 2))
+                        rule = standing_reserve_h2(d2_scene, d, h)
                         at = [m for x, m in zip(xs, ms) if abs(x - rule) < 1e-3]
                         if at:
                             ax.plot([rule], at, marker="*", ms=13, color=colour, ls="none", mec="k", mew=0.6)
@@ -193,7 +194,7 @@ def main() -> None:
     if args.summary:
         write_text_atomically(Path(args.summary), text)
     if args.figure:
-        figure(read_rows(out), Path(args.figure))
+        figure(read_rows(out), Path(args.figure), arm_config(base, "rough_d40")["scene"])
 
 
 if __name__ == "__main__":
