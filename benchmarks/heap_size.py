@@ -70,7 +70,7 @@ def point_dict(name: str) -> dict:
 def run_one(job: dict) -> dict:
     cfg = arm_config(job["base"], job["arm"])
     row, params = run_arm_case(cfg, "default", point_dict(job["point"]), job["seed"], job["keep"], COLUMNS)
-    f, d, h, v = POINTS[job["point"]]
+    _, d, h, _ = POINTS[job["point"]]
     row.update({"arm": job["arm"], "point": job["point"], "floor": ARMS[job["arm"]][0],
                 "pile_reserve": round(standing_reserve_h2(cfg["scene"], d, h), 4)})  # the reserve it ran [h^2]
     return row
