@@ -39,7 +39,9 @@ POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0), "c
           "mid": (0.30, 16.0, 69.0, 10.0), "mid_f45": (0.45, 14.0, 70.0, 10.0),
           # the main job's LDS point where 40 d^2 read MFR 0.244 and 4.7 h^2 0.392 (seed 1, 2026-12-07)
           "low_f": (0.1607, 12.12, 62.494, 12.7047),
-          "mid_f16": (0.16, 16.0, 69.0, 10.0)}  # mid at low friction
+          "mid_f16": (0.16, 16.0, 69.0, 10.0),  # mid at low friction
+          # 2026-12-07 (session 30): the d^2 heap from f 0.30 only, checked at the friction bound's edge
+          "corner_f31": (0.31, 11.0, 72.0, 12.0)}
 RESERVES = (1.5, 3.0, 4.7, 9.4)
 # arm -> (floor, reserve [h^2, the most], reserve [d^2] or None: scene.pile_reserve_d2)
 ARMS = {f"{floor}_r{r:g}": (floor, r, None) for floor in ("rough", "flat") for r in RESERVES}
@@ -130,7 +132,8 @@ def figure(rows: list[dict], path: Path, d2_scene: dict) -> None:
     good = [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.8), constrained_layout=True)
     colours = {"thin": "tab:blue", "wide": "tab:orange", "corner": "tab:green", "mid": "tab:red", "mid_f45": "tab:purple",
-               "low_f": "tab:brown", "mid_f16": "tab:pink"}
+               "low_f": "tab:brown", "mid_f16": "tab:pink",
+               "corner_f31": "tab:olive"}
     for ax, key in zip(axes, ("mfr", "pd")):
         for point, colour in colours.items():
             for floor, style in (("rough", "-o"), ("flat", "--s")):
