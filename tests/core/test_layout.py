@@ -19,3 +19,17 @@ def test_no_script_or_module_edits_sys_path():
 def test_the_package_has_no_two_modules_of_one_name():
     names = Counter(p.name for p in (ROOT / "spreadmap").rglob("*.py") if p.name != "__init__.py")
     assert not [n for n, k in names.items() if k > 1], sorted(n for n, k in names.items() if k > 1)
+
+
+NOT_ROOMS = {"core", "workflow", "benchmarks", "docs", "data"}  # tests/ folders that mirror no subpackage
+
+
+def test_tests_mirror_the_package_s_rooms():
+    """Every subpackage of spreadmap has a tests/ folder of its name holding a test file, and every
+    tests/ folder but the few that test no room (core: the top-level modules) names a subpackage."""
+    rooms = {p.parent.name for p in (ROOT / "spreadmap").glob("*/__init__.py")}
+    folders = {p.name for p in (ROOT / "tests").iterdir() if p.is_dir() and not p.name.startswith((".", "_"))}
+    no_tests = sorted(r for r in rooms if not list((ROOT / "tests" / r).glob("test_*.py")))
+    assert not no_tests, f"subpackages without a tests/ folder of their name holding a test file: {no_tests}"
+    strays = sorted(folders - rooms - NOT_ROOMS)
+    assert not strays, f"tests/ folders that name no subpackage of spreadmap: {strays}"

@@ -72,7 +72,7 @@ def seed_over_stated(cases: pd.DataFrame, target: str) -> tuple[float, float, fl
 
 
 # the bands the study ran with (docs/study/config.yaml); config.yaml now sets MFR's and PD's noise by
-# the fitted law (docs/noise, tests/metrics/test_noise_model.py) and keeps the thin-gap band for the layer only
+# the fitted law (docs/noise, tests/noise_law/test_noise_model.py) and keeps the thin-gap band for the layer only
 SHIPPED = yaml.safe_load((STUDY / "config.yaml").read_text())["noise_calibration"]
 
 
