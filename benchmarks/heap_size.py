@@ -55,12 +55,14 @@ COLUMNS = ("arm", "floor", "pile_reserve", "point", "seed", "case_id", "f", "d_u
 
 
 def arm_config(base: dict, arm: str) -> dict:
-    """The config of an arm: the shipped one with its floor and heap reserve set."""
+    """The config of an arm: the shipped one with its floor and heap reserve set (a d^2 arm holds its
+    d^2 heap at every friction, scene.pile_reserve_d2_from_f 0, as it ran before that key)."""
     floor, reserve, per_d2 = ARMS[arm]
     cfg = copy.deepcopy(base)
     cfg["scene"]["substrate"]["kind"] = floor
     cfg["scene"]["pile_reserve"] = reserve
     cfg["scene"]["pile_reserve_d2"] = per_d2
+    cfg["scene"]["pile_reserve_d2_from_f"] = 0.0
     return cfg
 
 
@@ -72,9 +74,9 @@ def point_dict(name: str) -> dict:
 def run_one(job: dict) -> dict:
     cfg = arm_config(job["base"], job["arm"])
     row, params = run_arm_case(cfg, "default", point_dict(job["point"]), job["seed"], job["keep"], COLUMNS)
-    _, d, h, _ = POINTS[job["point"]]
+    f, d, h, _ = POINTS[job["point"]]
     row.update({"arm": job["arm"], "point": job["point"], "floor": ARMS[job["arm"]][0],
-                "pile_reserve": round(standing_reserve_h2(cfg["scene"], d, h), 4)})  # the reserve it ran [h^2]
+                "pile_reserve": round(standing_reserve_h2(cfg["scene"], d, h, f), 4)})  # the reserve it ran [h^2]
     return row
 
 
@@ -149,7 +151,7 @@ def figure(rows: list[dict], path: Path, d2_scene: dict) -> None:
                     ax.errorbar(xs, ms, yerr=ses, fmt=style, color=colour, capsize=3, ms=4,
                                 label=f"{point} (f {f:g}, h/d {h / d:.1f}), {floor} floor")
                     if floor == "rough" and point not in ("thin", "wide"):  # 40 d^2 (scene.pile_reserve_d2)
-                        rule = standing_reserve_h2(d2_scene, d, h)
+                        rule = standing_reserve_h2(d2_scene, d, h, f)
                         at = [m for x, m in zip(xs, ms) if abs(x - rule) < 1e-3]
                         if at:
                             ax.plot([rule], at, marker="*", ms=13, color=colour, ls="none", mec="k", mew=0.6)

@@ -93,13 +93,14 @@ def time_step(diameter: float, density: float, material: dict, preset: dict, pre
     return forced, critical
 
 
-def standing_reserve_h2(scene: dict, d: float, h: float) -> float:
+def standing_reserve_h2(scene: dict, d: float, h: float, f: float | None = None) -> float:
     """The fed heap's standing reserve at a design point, in units of h^2 of bulk powder.
 
-    ``scene.pile_reserve`` x h^2, or with ``scene.pile_reserve_d2`` set, that many d^2 kept between
-    ``scene.pile_reserve_min`` and ``scene.pile_reserve`` h^2. The shipped config sets no d^2 heap:
-    40 d^2 read as 4.7 h^2 within +-3 % at f 0.30-0.45, h/d 4.3-5.8, and 35 % low at f 0.16, h/d 5.2
-    (docs/heap_size).
+    ``scene.pile_reserve`` x h^2, or with ``scene.pile_reserve_d2`` set and the friction at or above
+    ``scene.pile_reserve_d2_from_f``, that many d^2 kept between ``scene.pile_reserve_min`` and
+    ``scene.pile_reserve`` h^2. 40 d^2 read as 4.7 h^2 within +-3 % at f 0.30-0.45, h/d 4.3-5.8,
+    and 35 % low at f 0.16, h/d 5.2 (docs/heap_size): a powder of low friction stands lower, so the
+    d^2 heap holds only from a friction on.
 
     Parameters
     ----------
@@ -107,6 +108,9 @@ def standing_reserve_h2(scene: dict, d: float, h: float) -> float:
         The config's ``scene`` section.
     d, h : float
         The sphere diameter (the D50) and the gap [m].
+    f : float, optional
+        The friction coefficient [-]; needed when ``pile_reserve_d2`` is set and
+        ``pile_reserve_d2_from_f`` is above 0.
 
     Returns
     -------
@@ -117,6 +121,12 @@ def standing_reserve_h2(scene: dict, d: float, h: float) -> float:
     per_d2 = scene.get("pile_reserve_d2")
     if per_d2 is None:
         return most
+    from_f = float(scene.get("pile_reserve_d2_from_f") or 0.0)
+    if from_f > 0.0:
+        if f is None:
+            raise ValueError("scene.pile_reserve_d2_from_f is set: the heap's size needs the point's friction f")
+        if f < from_f:
+            return most
     least = min(float(scene["pile_reserve_min"]), most)
     return min(most, max(least, float(per_d2) * (d / h) ** 2))
 
@@ -193,7 +203,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # the heap falls below the standing reserve, so the pile holds only what passes before the
     # window opens plus that reserve; the window's own consumption is fed, not piled.
     fed = bool(scene.get("fed_heap", False))
-    reserve = standing_reserve_h2(scene, d, h)
+    reserve = standing_reserve_h2(scene, d, h, float(point["f"]))
     if target is None:
         need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + (0.0 if fed else window) + blade)
         if fed:  # the pile starts with the heap it will be fed to hold (a smaller one would be fed at once)

@@ -52,3 +52,32 @@ def test_the_scene_feeds_to_the_reserve_at_the_point(config):
     thin = {"f": 0.3, "d_um": 40.0, "h_um": 60.0, "v_mm_s": 10.0}
     a, b = case_params(with_d2, thin, "default"), case_params(without, thin, "default")
     assert {k: v for k, v in a.items() if k != "case_id"} == {k: v for k, v in b.items() if k != "case_id"}
+
+
+def test_the_d2_reserve_holds_from_its_friction_on():
+    """scene.pile_reserve_d2_from_f 0.30: below it the heap is pile_reserve h^2 (40 d^2 read 35 % low
+    at f 0.16), at and above it 40 d^2 between the bounds; without the point's friction it says so."""
+    scene = {**SCENE, "pile_reserve_d2_from_f": 0.30}
+    d, h = 10e-6, 58e-6  # h/d 5.8: the d^2 rule's 1.5 h^2
+    assert standing_reserve_h2(scene, d, h, 0.16) == 4.7
+    assert standing_reserve_h2(scene, d, h, 0.2999) == 4.7
+    assert standing_reserve_h2(scene, d, h, 0.30) == 1.5
+    assert standing_reserve_h2(scene, d, h, 0.45) == 1.5
+    assert standing_reserve_h2(scene, d, 35e-6, 0.31) == pytest.approx(40 / 3.5 ** 2, rel=1e-12)
+    with pytest.raises(ValueError, match="friction"):
+        standing_reserve_h2(scene, d, h)
+    # 0 (the schema's default): at every friction, as before the key
+    assert standing_reserve_h2({**SCENE, "pile_reserve_d2_from_f": 0.0}, d, h, 0.16) == 1.5
+
+
+def test_the_scene_keeps_the_shipped_heap_below_the_friction_and_the_d2_heap_above(config):
+    """At h/d 5.8: f 0.2 gives the pile_reserve_d2: null case (the same parameters, the same id), f 0.35
+    the 1.5 h^2 heap (fewer spheres fed)."""
+    ruled, plain = copy.deepcopy(config), copy.deepcopy(config)
+    ruled["scene"].update(fed_heap=True, pile_reserve=4.7, pile_reserve_d2=40.0, pile_reserve_min=1.5,
+                          pile_reserve_d2_from_f=0.30)
+    plain["scene"].update(fed_heap=True, pile_reserve=4.7, pile_reserve_d2=None)
+    low = {"f": 0.2, "d_um": 12.0, "h_um": 70.0, "v_mm_s": 10.0}
+    assert case_params(ruled, low, "default") == case_params(plain, low, "default")
+    high = {**low, "f": 0.35}
+    assert case_params(ruled, high, "default")["feed_count"] < 0.5 * case_params(plain, high, "default")["feed_count"]
