@@ -8,6 +8,8 @@ regime  the regime rule (scalars or arrays: DEM cases and surrogate predictions 
 sizes   the feed's volume quantiles (D10, D50, D90), gap / D90 and the layer's segregation
 case    case_metrics: all of it plus the diagnostics and the stability flags
 geometry  exact sphere / axis-aligned-box intersection volumes (the layer's packing density)
+window_start  where the flow settles along the blade's travel, and windows opened later (a run's
+        raw records, not a case's row: tools/window_start.py, docs/steady_window)
 """
 from .case import MAX_WEDGE_OVERLAP, MIN_HEAP_H2, NEW_COLUMNS, PHASES, SETTING_KEYS, SIZE_COLUMNS, case_metrics, measure
 from .flow import (
