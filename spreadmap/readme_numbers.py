@@ -296,13 +296,14 @@ def _stop(docs: Path, day: str) -> dict:
 MAIN_JOB = "docs/main_job/run_2026-12-04/"
 ADHESIVE = "docs/main_job/run_2026-12-06/"
 ADHESIVE_B = "docs/main_job/run_2026-12-06b/"
-ADHESIVE_C = "docs/main_job/run_2026-12-07c/"
-SETUP_C = 44  # s, the set-up before the first job of run_2026-12-07c (the run's log: 08:09:14 -> 08:09:58)
+FRONT_RUN = "2026-12-07c"  # the main job the README's front paragraph reports
+ADHESIVE_C = f"docs/main_job/run_{FRONT_RUN}/"
+SETUP_C = 44  # s, the set-up before the run's first job (the run's log: 08:09:14 -> 08:09:58)
 
 
 def _analyses_written(docs: Path) -> float:
-    """Minutes from the command to the last of the maps, decisions and explorer page (run_2026-12-07c)."""
-    t = _csv(_run(docs, "2026-12-07c") / "timeline.csv")
+    """Minutes from the command to the last of the maps, decisions and explorer page (FRONT_RUN)."""
+    t = _csv(_run(docs, FRONT_RUN) / "timeline.csv")
     return float(t[t["rule"].isin(["maps", "decide", "explorer"])]["end_min"].max()) + SETUP_C / 60
 
 
@@ -330,19 +331,19 @@ CLAIMS: list[Claim] = [
           lambda d: [_factor(d, "mfr")["factor"]]),
     Claim("adhesive main job (batches of 8): cases, CPU h", "met its map criteria at {} cases ({} CPU h)",
           ADHESIVE_C + "stopped.json: n, cpu_hours",
-          lambda d: [_stop(d, "2026-12-07c")["n"], _stop(d, "2026-12-07c")["cpu_hours"]]),
+          lambda d: [_stop(d, FRONT_RUN)["n"], _stop(d, FRONT_RUN)["cpu_hours"]]),
     Claim("adhesive main job (batches of 8): minutes to the maps, decisions and explorer",
           "explorer page **{} min** after the",
           ADHESIVE_C + "timeline.csv: the last end_min of maps, decide, explorer + the set-up (44 s, the run's log)",
           lambda d: [_analyses_written(d)]),
     Claim("adhesive main job (batches of 8): the whole run's minutes", "the surrogate's validation last, {} min",
           ADHESIVE_C + "timeline.json: wall_s / 60, + the set-up before the first job (44 s, the run's log)",
-          lambda d: [(_json(_run(d, "2026-12-07c") / "timeline.json")["wall_s"] + SETUP_C) / 60]),
+          lambda d: [(_json(_run(d, FRONT_RUN) / "timeline.json")["wall_s"] + SETUP_C) / 60]),
     Claim("adhesive main job (batches of 8): map error of MFR and PD at the stop, tolerance",
           "map error MFR {} and PD {} against the {} tolerance",
           ADHESIVE_C + "stopped.json: criteria.at_this_batch.map_error.targets.*.estimate, tolerance",
           lambda d: (lambda t: [t["mfr"]["estimate"], t["pd"]["estimate"], t["mfr"]["tolerance"]])(
-              _stop(d, "2026-12-07c")["criteria"]["at_this_batch"]["map_error"]["targets"])),
+              _stop(d, FRONT_RUN)["criteria"]["at_this_batch"]["map_error"]["targets"])),
     Claim("the adhesive replay of the shipped loop: margin, batch, fewest cases, stops honest, stops, replays, 95 % CI",
           "(margin {}, batches of {}, stops from {} cases: {} of {} stops within the tolerance on {} replays, 95 % CI {}-{}",
           "config.yaml converge; docs/replay/adhesive/batch8/stops.csv (design of the config's batch, bare "
