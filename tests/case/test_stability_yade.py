@@ -152,7 +152,6 @@ def test_spheres_pinned_under_the_blade_are_told_from_an_unstable_step(config, t
     and elsewhere. (At this point the blade-pressed peak reads 3.5-10.6 % R at 0.35-0.88 x critical;
     0.92 and 0.95 blow up, the whole bed, not the blade's neighbourhood first: docs/guide/01-model.md.)"""
     config = dry(config)  # the documented wedges are the dry scene's (issue 49 added adhesion)
-    config["presets"]["default"]["transient_d"] = 3  # and their window opened 3 d beyond the pile (5 d since 2026-12-07)
     wedge_point = {"f": 0.3, "d_um": 45.0, "h_um": 65.0, "v_mm_s": 10.0}
     points = [("smoke", wedge_point, 2),
               ("default", {"f": 0.3529, "d_um": 47.182, "h_um": 73.854, "v_mm_s": 13.7251}, 1)]
