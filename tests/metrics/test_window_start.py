@@ -52,22 +52,23 @@ def test_a_settling_flow_reads_low_before_it_settles_and_the_later_window_the_se
 
 def test_the_trend_z_of_a_poisson_flow_is_standard_normal_and_a_rise_reads_positive():
     """Independent Poisson counts per series interval (the counting law), 300 cases: z has mean 0
-    and SD 1 within their sampling error; the same counts with a 50 % step at the middle read z > 0 in every case, > 2.5 on average (t with 4 dof: a
-noise estimate from 8 batches keeps z modest)."""
+    and SD 1 within their sampling error; the same counts with a 50 % step at the middle read z > 0
+    in every case, > 2.5 on average (t with 4 dof: a noise estimate from 8 batches keeps z modest)."""
     rng = np.random.default_rng(4)
     sphere = math.pi * D ** 3 / 6
     per_interval = 4.0  # spheres passed per 0.05 d
+    def poisson_flow(counts, step_share=0.0):
+        # the flow over each 0.05 d interval of the series, a step of step_share at 7 d (the window's middle)
+        return lambda s: (counts[min(int(round((s + 2.0) / 0.05)), len(counts) - 1)] * sphere / (0.05 * D)
+                          * (1.0 + step_share * (s > 7.0)))
+
     zs, rising = [], []
     for _ in range(300):
-        counts = rng.poisson(per_interval, 261)
-        flows = lambda s, c=counts: c[min(int(round((s + 2.0) / 0.05)), len(c) - 1)] * sphere / (0.05 * D)  # noqa: E731
-        zs.append(ws.later_window(_raw(flows), 3)["trend_z"])
+        zs.append(ws.later_window(_raw(poisson_flow(rng.poisson(per_interval, 261))), 3)["trend_z"])
     zs = np.array(zs)
     assert abs(zs.mean()) < 3 * 1.1 / math.sqrt(300) and 0.85 < zs.std() < 1.15
-    for k in range(40):
-        counts = rng.poisson(per_interval, 261)
-        flows = lambda s, c=counts: c[min(int(round((s + 2.0) / 0.05)), len(c) - 1)] * sphere / (0.05 * D) * (1.0 + 0.5 * (s > 7.0))  # noqa: E731
-        rising.append(ws.later_window(_raw(flows), 3)["trend_z"])
+    for _ in range(40):
+        rising.append(ws.later_window(_raw(poisson_flow(rng.poisson(per_interval, 261), 0.5)), 3)["trend_z"])
     assert np.mean(rising) > 2.5 and min(rising) > 0
 
 
