@@ -307,6 +307,42 @@ def _analyses_written(docs: Path) -> float:
     return float(t[t["rule"].isin(["maps", "decide", "explorer"])]["end_min"].max()) + SETUP_C / 60
 
 
+SETUP_C_AGAIN = 47.6  # s, the set-up of run_2026-12-07c_again (the command at 12:04:43, the run's log from 12:05:30.6)
+
+
+def _same_run_again(docs: Path) -> list[float]:
+    """run_2026-12-07c once more (session 30): minutes to the maps, decisions and explorer page, and
+    its CPU over run_2026-12-07c's (the same cases, summed)."""
+    t = _csv(_run(docs, "2026-12-07c_again") / "timeline.csv")
+    minutes = float(t[t["rule"].isin(["maps", "decide", "explorer"])]["end_min"].max()) + SETUP_C_AGAIN / 60
+    again = _csv(_run(docs, "2026-12-07c_again") / "cases.csv").set_index("case_id")["cpu_time"]
+    first = _csv(_run(docs, "2026-12-07c") / "cases.csv").set_index("case_id")["cpu_time"]
+    return [minutes, float(again.sum() / first.loc[again.index].sum())]
+
+
+def _window_5d_cost(docs: Path) -> list[float]:
+    """The 5 d window's run (run_2026-12-07d) against the 3 d window's (run_2026-12-07c_again), paired by
+    design point (the case id less its content key): the median over the pairs of the CPU ratio, and
+    the pairs."""
+    five = _csv(_run(docs, "2026-12-07d") / "cases.csv")
+    three = _csv(_run(docs, "2026-12-07c_again") / "cases.csv")
+    for t in (five, three):
+        t["point"] = t["case_id"].str.rsplit("-", n=1).str[0]
+    m = five.merge(three, on="point", suffixes=("", "_3d"))
+    return [float((m["cpu_time"] / m["cpu_time_3d"]).median()), len(m)]
+
+
+def _window_5d_trend(docs: Path) -> list[float]:
+    """Mean flow-trend z (and its SE) of the 5 d window's run and of the 3 d window's."""
+    out = []
+    for day in ("2026-12-07d", "2026-12-07c"):
+        z = _csv(_run(docs, day) / "cases.csv")["flow_trend_z_batch"].dropna()
+        out.append(float(z.mean()))
+        if day == "2026-12-07d":
+            out.append(float(z.std(ddof=1) / math.sqrt(len(z))))
+    return out
+
+
 def _batch8_adhesive(docs: Path) -> list[float]:
     import yaml
     from scipy.stats import beta
@@ -344,6 +380,20 @@ CLAIMS: list[Claim] = [
           ADHESIVE_C + "stopped.json: criteria.at_this_batch.map_error.targets.*.estimate, tolerance",
           lambda d: (lambda t: [t["mfr"]["estimate"], t["pd"]["estimate"], t["mfr"]["tolerance"]])(
               _stop(d, FRONT_RUN)["criteria"]["at_this_batch"]["map_error"]["targets"])),
+    Claim("the shipped run again (session 30): minutes to the maps, CPU over run_2026-12-07c's",
+          "session reached its maps at {} min ({}x the CPU)",
+          "docs/main_job/run_2026-12-07c_again/timeline.csv (+ the set-up, 47.6 s, the run's log), cases.csv: "
+          "cpu_time summed over run_2026-12-07c's same cases",
+          _same_run_again),
+    Claim("the 5 d window: CPU per case paired with the 3 d window's run, pairs",
+          "at **{}x the CPU per case** ({} points paired)",
+          "docs/main_job/run_2026-12-07d/cases.csv, run_2026-12-07c_again/cases.csv: median cpu_time ratio "
+          "over the design points both ran",
+          _window_5d_cost),
+    Claim("the 5 d window: mean flow-trend z (SE) of its run, and the 3 d window's",
+          "mean flow-trend z +{}, SE {}, against +{})",
+          "docs/main_job/run_2026-12-07d/cases.csv, run_2026-12-07c/cases.csv: flow_trend_z_batch, mean and SE",
+          _window_5d_trend),
     Claim("the adhesive replay of the shipped loop: margin, batch, fewest cases, stops honest, stops, replays, 95 % CI",
           "(margin {}, batches of {}, stops from {} cases: {} of {} stops within the tolerance on {} replays, 95 % CI {}-{}",
           "config.yaml converge; docs/replay/adhesive/batch8/stops.csv (design of the config's batch, bare "
