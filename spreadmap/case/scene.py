@@ -98,9 +98,9 @@ def standing_reserve_h2(scene: dict, d: float, h: float, f: float | None = None)
 
     ``scene.pile_reserve`` x h^2, or with ``scene.pile_reserve_d2`` set and the friction at or above
     ``scene.pile_reserve_d2_from_f``, that many d^2 kept between ``scene.pile_reserve_min`` and
-    ``scene.pile_reserve`` h^2. 40 d^2 read as 4.7 h^2 within +-3 % at f 0.30-0.45, h/d 4.3-5.8,
-    and 35 % low at f 0.16, h/d 5.2 (docs/heap_size): a powder of low friction stands lower, so the
-    d^2 heap holds only from a friction on.
+    ``scene.pile_reserve`` h^2. 40 d^2 read as 4.7 h^2 within +-3 % at three points of f 0.30-0.45,
+    h/d 4.3-5.8, 35 % low at f 0.16, h/d 5.2, and 7 % low at f 0.31, h/d 6.5 (docs/heap_size): the
+    shipped config sets no d^2 heap.
 
     Parameters
     ----------
