@@ -5,8 +5,11 @@ Left: the usable DEM cases in the (h/d, v) plane coloured by their DEM regime. R
 regime (``grids.regime_probabilities``: the thresholds of ``metrics.classify`` on the predictive
 distribution of MFR and PD), drawn as the most probable regime's colour with contours of
 P(jamming) and P(short feed) at 0.1, 0.5 and 0.9; beyond the data hatched; the line h = d (a gap of
-one particle). ``counts``: DEM regime against the most probable regime at the cases' own settings
-(the final model on its training cases: a consistency check, not a validation).
+one particle). Cases of a size distribution (``size_span`` > 0) are placed by h/D90 of their feed
+instead of h/d (the coarse tail decides whether spheres pass the gap), and the right panel adds the
+line h = D90 (D90 / D50 of the cases' feeds, their median: ``coarse_ratio``). ``counts``: DEM
+regime against the most probable regime at the cases' own settings (the final model on its
+training cases: a consistency check, not a validation).
 
 ``regime_tables`` computes the numbers (no figure), ``draw_regime_overlay`` draws them;
 ``regime_overlay`` does both and writes the plane's numbers beside the figure (``<stem>_plane.csv``;
@@ -40,6 +43,29 @@ PLANE_COLUMNS = [*NAMES, "data_distance", "supported", *(c for t in grids.REGIME
 def most_probable(frame: pd.DataFrame) -> np.ndarray:
     P = frame[["p_normal", "p_jamming", "p_short_feed"]].to_numpy()
     return np.array(REGIMES, dtype=object)[np.argmax(P, axis=1)]
+
+
+def coarse_ratio(cases: pd.DataFrame) -> float | None:
+    """D90 / D50 of the cases' feeds (their median) where the cases hold a size distribution.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        Cases with ``size_span``, ``feed_d50_um`` and ``feed_d90_um`` (``spreadmap.metrics.sizes``).
+
+    Returns
+    -------
+    float or None
+        The median ratio over the cases with ``size_span`` > 0 and both quantiles finite; None
+        when there are none (spheres of one size, or a table from before the columns).
+    """
+    if not {"size_span", "feed_d50_um", "feed_d90_um"} <= set(cases.columns):
+        return None
+    span = pd.to_numeric(cases["size_span"], errors="coerce").to_numpy(float)
+    ratio = (pd.to_numeric(cases["feed_d90_um"], errors="coerce")
+             / pd.to_numeric(cases["feed_d50_um"], errors="coerce")).to_numpy(float)
+    ok = (span > 0) & np.isfinite(ratio)
+    return float(np.median(ratio[ok])) if ok.any() else None
 
 
 def regime_counts(dem: np.ndarray, model: np.ndarray) -> pd.DataFrame:
@@ -133,6 +159,8 @@ def regime_tables(cases: pd.DataFrame, model, rules: dict, f: float = PLANE["f"]
         grids.evaluate(model, grids.grid_frame(f=f, d_um=d, h_um=h, v_mm_s=v_mm_s), targets, support), rules)
     cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
         "h_over_d", "mfr", "pd", "regime", "p_normal", "p_jamming", "p_short_feed", "regime_pred"]
+    if coarse_ratio(data) is not None:  # a size distribution: the feed's quantiles and h/D90 go with the cases
+        cols += ["size_span", "feed_d50_um", "feed_d90_um", "h_over_d90"]
     return data[[c for c in cols if c in data]].reset_index(drop=True), plane
 
 
@@ -144,13 +172,18 @@ def draw_regime_overlay(data: pd.DataFrame, plane: pd.DataFrame, stem, excluded:
     d, h = np.unique(plane["d_um"]), np.unique(plane["h_um"])
     f, v_mm_s = float(plane["f"].iloc[0]), float(plane["v_mm_s"].iloc[0])
     shape = (len(d), len(h))  # d varies slowest
+    ratio = coarse_ratio(data)  # D90 / D50 of a size distribution's feed; None: one size
+    x_col, x_label = (("h_over_d90", "gap over the feed's D90, h/D90 [-] (a size distribution)") if ratio
+                      else ("h_over_d", "gap to diameter ratio h/d [-]"))
     fig = new_figure(14.5, 5.8)
     ax0, ax1 = fig.subplots(1, 2)
     for r in REGIMES:
         m = (data["regime"] == r).to_numpy()
-        ax0.scatter(data["h_over_d"][m], data["v_mm_s"][m], c=COLOURS[r], marker=MARKERS[r], s=40,
+        ax0.scatter(data[x_col][m], data["v_mm_s"][m], c=COLOURS[r], marker=MARKERS[r], s=40,
                     edgecolor="white", lw=0.4, label=f"{NAMES_LONG[r]} ({int(m.sum())})", zorder=3)
-    ax0.set_xlabel("gap to diameter ratio h/d [-]")
+    if ratio:
+        ax0.axvline(1.0, color="k", lw=1, ls=":", zorder=1, label="h = D90")
+    ax0.set_xlabel(x_label)
     ax0.set_ylabel(BY_NAME["v_mm_s"].label)
     ax0.set_title(f"DEM regimes of {len(data)} cases", fontsize=10)
     ax0.grid(alpha=0.3)
@@ -169,6 +202,8 @@ def draw_regime_overlay(data: pd.DataFrame, plane: pd.DataFrame, stem, excluded:
     if (~ok).any():
         ax1.contourf(d, h, (~ok).astype(float), levels=[0.5, 1.5], colors="none", hatches=["////"])
     ax1.plot(d, d, color="k", lw=1, ls=":")
+    if ratio:
+        ax1.plot(d, ratio * d, color="k", lw=1.2, ls="-.")
     ax1.set_ylim(h.min(), h.max())
     for r in REGIMES:
         m = (data["regime"] == r).to_numpy()
@@ -176,10 +211,13 @@ def draw_regime_overlay(data: pd.DataFrame, plane: pd.DataFrame, stem, excluded:
                     lw=0.3, zorder=4)
     handles = [Line2D([], [], color=COLOURS["jamming"], lw=2, label="P(jamming) = 0.5 (dashed 0.1, 0.9)"),
                Line2D([], [], color=COLOURS["short_feed"], lw=2, label="P(short feed) = 0.5 (dashed 0.1, 0.9)"),
-               Line2D([], [], color="k", ls=":", label="h = d (gap of one particle)"),
+               Line2D([], [], color="k", ls=":", label="h = D50 (gap of one median particle)" if ratio
+                      else "h = d (gap of one particle)"),
+               *([Line2D([], [], color="k", ls="-.", lw=1.2, label=f"h = D90 ({ratio:.2f} x D50, the feed's)")]
+                 if ratio else []),
                Line2D([], [], marker="o", ls="", color="0.4", ms=4, label="DEM cases (all f, v)")]
     ax1.legend(handles=handles, fontsize=7.5, loc="lower right", framealpha=0.9)
-    ax1.set_xlabel(BY_NAME["d_um"].label)
+    ax1.set_xlabel("the powder's D50 [um]" if ratio else BY_NAME["d_um"].label)
     ax1.set_ylabel(BY_NAME["h_um"].label)
     ax1.set_title(f"Most probable regime of a new run at f = {fmt(f)}, v = {fmt(v_mm_s)} mm/s "
                   f"(shade), probability contours", fontsize=10)
@@ -189,4 +227,4 @@ def draw_regime_overlay(data: pd.DataFrame, plane: pd.DataFrame, stem, excluded:
     note = support_note(fig, plane["supported"].to_numpy(), support, "points of the (d, h) plane")
     paths = save_figure(fig, stem, data, floor)
     return MapResult(paths, data, {"counts": counts, "excluded": int(excluded), "agree": agree,
-                                    "plane": plane, "note": note})
+                                    "plane": plane, "note": note, "x": x_col, "coarse_ratio": ratio})

@@ -196,6 +196,35 @@ def test_regime_overlay_counts_planted_regimes(tmp_path):
     assert counts["both"].sum() >= 0.85 * counts["dem"].sum()
     files_ok(res)
     names_the_floor(res.paths)
+    assert res.info["x"] == "h_over_d" and res.info["coarse_ratio"] is None  # one size: by h/d
+
+
+def test_regime_overlay_places_a_size_distribution_by_h_over_d90(tmp_path):
+    """Cases of a size distribution (size_span > 0) are placed by h/D90 of their feed, and the
+    figure's CSV carries it; D90 / D50 is the median of the feeds' (1.5 here, one case 1.9); a table
+    whose size_span is 0 (spheres of one size, as the scene records them) stays on h/d."""
+    df = syn.table(30, 0.03, seed=6)
+    for t in ("coverage", "thickness_ratio"):
+        df[t], df[f"{t}_sd"] = 0.9, 0.01
+    df["regime"] = "normal"
+    df["size_span"] = 1.0
+    df["feed_d50_um"] = df["d_um"]
+    df["feed_d90_um"] = 1.5 * df["d_um"]
+    df.loc[3, "feed_d90_um"] = 1.9 * df.loc[3, "d_um"]
+    df["h_over_d90"] = df["h_um"] / df["feed_d90_um"]
+    ok = df[df["status"] == "ok"]
+    X = ok[list(NAMES)].to_numpy(float)
+    targets = ("mfr", "coverage", "thickness_ratio")
+    m = SurrogateModel(targets, {t: GPModel().fit(X, ok[t].to_numpy(float), ok[f"{t}_sd"].to_numpy(float))
+                                 for t in targets}, X, LOW, HIGH)
+    res = maps.regime_overlay(df, m, tmp_path / "psd", RULES, n_d=6, n_h=4, support=SUPPORT, floor=ROUGH)
+    assert res.info["x"] == "h_over_d90" and res.info["coarse_ratio"] == pytest.approx(1.5)
+    written = pd.read_csv(res.paths["csv"])
+    np.testing.assert_allclose(written["h_over_d90"], ok["h_um"].to_numpy() / ok["feed_d90_um"].to_numpy())
+    one = df.assign(size_span=0.0, feed_d90_um=df["d_um"], h_over_d90=df["h_um"] / df["d_um"])
+    res1 = maps.regime_overlay(one, m, tmp_path / "one", RULES, n_d=6, n_h=4, support=SUPPORT, floor=ROUGH)
+    assert res1.info["x"] == "h_over_d" and res1.info["coarse_ratio"] is None
+    assert regimes.coarse_ratio(df.drop(columns=["feed_d90_um"])) is None
 
 
 def test_regime_overlay_needs_the_targets_of_the_rule(model, cases, tmp_path):
