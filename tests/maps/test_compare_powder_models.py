@@ -40,3 +40,22 @@ def test_changes_and_recommendations(tmp_path):
     text = (tmp_path / "out" / "powder_models.md").read_text()
     assert "| fine | fastest | 65 um, 15 mm/s, P 0.99 | 75 um, 15 mm/s, P 0.91 |" in text
     assert (tmp_path / "out" / "powder_models.png").stat().st_size > 10_000
+
+
+def test_names_label_the_two_runs(tmp_path):
+    """--names labels the columns, the table and the change (second - first) of any two runs: one
+    size against a size distribution, as issue 51's comparison runs it."""
+    rec = [{"powder": "cut_15_45", "kind": "fastest", "status": "recommended", "recommended": True, "h_um": 70.0,
+            "v_mm_s": 5.0, "probability": 0.95, "quality": 0.4}]
+    one = results(tmp_path, "one", 0.0, 0.006, rec)
+    psd = results(tmp_path, "psd", 0.02, 0.008, [{**rec[0], "status": "none meets", "recommended": False}])
+    assert tool.main([str(one), str(psd), "--names", "one size", "span 1", "--title", "t", "--out",
+                      str(tmp_path / "out")]) == 0
+    changes = tool.at_diameters(tool.band_table(one), tool.band_table(psd), ["mfr"], ("one size", "span 1"))
+    assert changes["mfr_change"].to_numpy() == pytest.approx(0.02)
+    assert changes["mfr_change_sd"].to_numpy() == pytest.approx(0.010)  # 6-8-10
+    text = (tmp_path / "out" / "powder_models.md").read_text()
+    assert "change span 1 - one size" in text and "| mfr one size | mfr span 1 | change |" in text
+    assert "| cut_15_45 | fastest | 70 um, 5 mm/s, P 0.95 | none |" in text
+    with pytest.raises(SystemExit):
+        tool.main([str(one), str(psd), "--names", "same", "same", "--out", str(tmp_path / "bad")])
