@@ -136,6 +136,13 @@ ARMS = {
     # reserve in a full pile, no freeze, no feed, box contacts read every 1000 steps; the arm the
     # issue's goal is stated against
     "issue31_start": {"rev": "dd28def", "overrides": {}},
+    # issue 50's steady window and its cost lever (docs/steady_window): the window opened 5 d beyond
+    # the pile (steady, 1.28x the CPU in a main job); the fed heap feeding the transient's passing
+    # instead of piling it (scene.feed_transient), at the shipped 3 d and with the 5 d window
+    "window5": {"rev": None, "overrides": {"presets": {"default": {"transient_d": 5}}}},
+    "fed_transient": {"rev": None, "overrides": {"scene": {"feed_transient": True}}},
+    "window5_fed_transient": {"rev": None, "overrides": {"presets": {"default": {"transient_d": 5}},
+                                                         "scene": {"feed_transient": True}}},
 }
 CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_fill",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",

@@ -215,7 +215,12 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # transient and under the blade at a generous MFR, times a margin (not the densest
         # packing); expressed per unit width, as the heap-reserve rule above, over the pile's height
         mfr_high = scene["mfr_expected_max"]
-        need = scene["pile_margin"] * ((0.0 if fed else target * sphere_volume / width) + mfr_high * h * (transient + blade))
+        # scene.feed_transient (with the fed heap): the transient's passing is fed too, not piled:
+        # the pile holds what fills the gap under the blade and the standing reserve, and the feed
+        # starts with the blade (the pile held the transient's passing and settled with it: a 5 d
+        # transient cost 1.28x the CPU of 3 d where the travel alone said 1.07x, docs/steady_window)
+        before_window = blade if (fed and scene.get("feed_transient")) else transient + blade
+        need = scene["pile_margin"] * ((0.0 if fed else target * sphere_volume / width) + mfr_high * h * before_window)
         need *= heap / (h + heap)  # the whole pile, not only its heap above the gap, is the reserve
         window_cap = max(window, preset["window_max_d"] * d)
         window_expected = min(window_cap, max(window, target * sphere_volume / (scene["mfr_expected"] * h * width)))

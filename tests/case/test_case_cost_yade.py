@@ -103,6 +103,33 @@ def test_fed_heap_pile_holds_only_what_passes_before_the_window_and_the_reserve(
     assert fed["n_particles"] < 0.75 * plain["n_particles"]
 
 
+def test_feed_transient_piles_only_the_reserve_and_the_gap_under_the_blade(config):
+    """Pure arithmetic (no YADE): with scene.feed_transient the fed pile is shorter by what passes in
+    the transient (pile_margin x mfr_expected_max x h x transient, over the heap's share of the pile's
+    height), the same at a 3 d and a 5 d transient but for that; the heap it is fed to, the window
+    and the target are unchanged; off (the default) the parameters are the shipped ones."""
+    point = {"f": 0.3, "d_um": 30.0, "h_um": 65.0, "v_mm_s": 10.0}
+    d, h = 30e-6, 65e-6
+    heap = config["presets"]["default"]["heap_height_d"] * d
+    packing = config["scene"]["packing_guess"]
+    for transient_d in (3, 5):
+        base = copy.deepcopy(config)
+        base["presets"]["default"]["transient_d"] = transient_d
+        base["scene"]["fed_heap"] = True
+        fed_all = copy.deepcopy(base)
+        fed_all["scene"]["feed_transient"] = True
+        plain, lever = case_params(base, point, "default"), case_params(fed_all, point, "default")
+        transient_part = (config["scene"]["pile_margin"] * config["scene"]["mfr_expected_max"] * h
+                          * transient_d * d * heap / (h + heap))
+        assert plain["pile_length"] - lever["pile_length"] == pytest.approx(transient_part / (packing * heap), rel=1e-9)
+        assert lever["feed_count"] == plain["feed_count"] and lever["target_passed"] == plain["target_passed"]
+        assert lever["transient_travel"] == plain["transient_travel"] == pytest.approx(transient_d * d)
+        assert lever["n_particles"] < plain["n_particles"]
+    off = copy.deepcopy(config)
+    off["scene"]["feed_transient"] = False
+    assert case_params(off, point, "default") == case_params(config, point, "default")
+
+
 def test_fed_heap_keeps_the_heap_every_sphere_and_the_measurement(config, tmp_path):
     """The same smoke case (same seed; a 12 d window, so that the fed heap runs below its reserve
     and is fed) from a full pile and from a fed heap: the fed run starts with fewer spheres, adds

@@ -57,6 +57,7 @@ def _changed(config, path, value):
     (("material", "restitution"), 0.5),
     (("scene", "substrate", "kind"), "flat"),
     (("scene", "fed_heap"), False),  # the shipped scene feeds the heap
+    (("scene", "feed_transient"), True),  # the pile without the transient's passing
     (("scene", "settle_damping"), 0.3),
     (("presets", "default", "width_d"), 4.0),
     (("presets", "default", "dt_factor"), 0.2),
