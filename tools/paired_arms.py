@@ -1,0 +1,157 @@
+#!/usr/bin/env python
+"""An arm against a base arm, case by case (same point, same packing seed): the pre-registered
+numbers of a scene change's A/B (docs/steady_window, docs/heap_size).
+
+    .venv/bin/python tools/paired_arms.py docs/steady_window/transient_fed/cases.csv --base shipped \\
+        --arms fed_transient window5_fed_transient --out docs/steady_window/transient_fed/paired.md
+
+Reads a cases table with the columns benchmarks/precision.py writes (arm, point, seed, status,
+flagged, mfr, pd, mfr_sd, pd_sd, cpu_time, heap_end_h2). A pair is a point and seed both arms ran
+to the end ("ok"). Per arm:
+
+- **CPU**: the geometric mean of the pairs' CPU ratios arm / base, with a 95 % t interval on the
+  log ratios (the pairs independent);
+- **MFR and PD**: the pooled mean relative difference (arm - base) / base over the pairs, with a
+  90 % t interval; per point the mean difference over its seeds and its z against the SE from the
+  cases' recorded SDs (``mfr_sd``, ``pd_sd``: each case's own noise estimate, independent of the
+  difference);
+- **flags**: pairs where the arm's case is flagged and the base's is not; the least heap at the
+  window's end (``heap_end_h2``, h^2).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from spreadmap.files import write_text_atomically
+
+TARGETS = ("mfr", "pd")
+
+
+def pairs(cases: pd.DataFrame, arm: str, base: str) -> pd.DataFrame:
+    """The (point, seed) pairs both arms finished: the arm's columns with suffix ``_arm``, the
+    base's with ``_base``.
+
+    Parameters
+    ----------
+    cases : pandas.DataFrame
+        The cases table (``arm``, ``point``, ``seed``, ``status`` and the measured columns).
+    arm, base : str
+        The two arms' names.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per pair, sorted by point and seed.
+    """
+    done = cases[cases["status"] == "ok"]
+    joined = done[done["arm"] == arm].merge(done[done["arm"] == base], on=["point", "seed"], how="inner",
+                                            suffixes=("_arm", "_base"))
+    return joined.sort_values(["point", "seed"]).reset_index(drop=True)
+
+
+def flagged(values: pd.Series) -> np.ndarray:
+    """A flag column as booleans (True / False or their strings, as a CSV reads back)."""
+    return values.astype(str).str.strip().str.lower().isin(("true", "1")).to_numpy()
+
+
+def cpu_ratio(p: pd.DataFrame, level: float = 0.95) -> tuple[float, float, float]:
+    """Geometric mean of the pairs' CPU ratios arm / base and its t interval (on the log ratios)."""
+    logs = np.log(p["cpu_time_arm"].to_numpy(float) / p["cpu_time_base"].to_numpy(float))
+    n = len(logs)
+    mean = float(logs.mean())
+    if n < 2:
+        return math.exp(mean), math.nan, math.nan
+    half = stats.t.ppf(0.5 + level / 2, n - 1) * logs.std(ddof=1) / math.sqrt(n)
+    return math.exp(mean), math.exp(mean - half), math.exp(mean + half)
+
+
+def relative_shift(p: pd.DataFrame, target: str, level: float = 0.90) -> tuple[float, float, float]:
+    """The pooled mean of the pairs' (arm - base) / base and its t interval."""
+    rel = (p[f"{target}_arm"].to_numpy(float) - p[f"{target}_base"].to_numpy(float)) / p[f"{target}_base"].to_numpy(float)
+    n = len(rel)
+    mean = float(rel.mean())
+    if n < 2:
+        return mean, math.nan, math.nan
+    half = stats.t.ppf(0.5 + level / 2, n - 1) * rel.std(ddof=1) / math.sqrt(n)
+    return mean, mean - half, mean + half
+
+
+def by_point(p: pd.DataFrame, target: str) -> pd.DataFrame:
+    """Per point: the seeds paired, the mean difference arm - base, its SE from the cases' recorded
+    SDs (the variance of a mean of n differences: the sum of both cases' variances over n^2) and z."""
+    rows = []
+    for point, g in p.groupby("point", sort=True):
+        diff = (g[f"{target}_arm"] - g[f"{target}_base"]).to_numpy(float)
+        var = (g[f"{target}_sd_arm"].to_numpy(float) ** 2 + g[f"{target}_sd_base"].to_numpy(float) ** 2).sum()
+        se = math.sqrt(var) / len(g)
+        rows.append({"point": point, "seeds": len(g), "diff": float(diff.mean()), "se": se,
+                     "z": float(diff.mean()) / se if se > 0 else math.nan})
+    return pd.DataFrame(rows)
+
+
+def report(cases: pd.DataFrame, arm: str, base: str) -> str:
+    """The markdown section of one arm against the base."""
+    p = pairs(cases, arm, base)
+    lines = [f"## {arm} against {base}", ""]
+    if p.empty:
+        return "\n".join(lines + ["No pair finished.", ""])
+    ran = cases[cases["arm"] == arm]
+    g, lo, hi = cpu_ratio(p)
+    lines += [f"- **Pairs**: {len(p)} (point, seed) of {len(ran)} {arm} cases at {p['point'].nunique()} points.",
+              f"- **CPU per case, arm / base**: geometric mean {g:.3f} (95 % CI {lo:.3f}-{hi:.3f}); "
+              f"the pairs' ratios {p['cpu_time_arm'].div(p['cpu_time_base']).min():.2f}-"
+              f"{p['cpu_time_arm'].div(p['cpu_time_base']).max():.2f}."]
+    for t in TARGETS:
+        m, mlo, mhi = relative_shift(p, t)
+        pts = by_point(p, t)
+        worst = pts.loc[pts["z"].abs().idxmax()] if pts["z"].notna().any() else None
+        text = (f"; the largest point z {worst['z']:+.2f} ({worst['point']})" if worst is not None else "")
+        lines.append(f"- **{t.upper()}, (arm - base) / base pooled**: {100 * m:+.2f} % (90 % CI {100 * mlo:+.2f} "
+                     f"to {100 * mhi:+.2f} %){text}.")
+    new_flags = flagged(p["flagged_arm"]) & ~flagged(p["flagged_base"])
+    heap = pd.to_numeric(p.get("heap_end_h2_arm"), errors="coerce") if "heap_end_h2_arm" in p else pd.Series(dtype=float)
+    lines.append(f"- **Flags**: {int(new_flags.sum())} pairs flagged in the arm and not in the base"
+                 + (f" ({', '.join(f'{r.point} s{r.seed}' for r in p[new_flags].itertuples())})" if new_flags.any() else "")
+                 + (f"; heap at the window's end at least {heap.min():.2f} h^2 in the arm's paired cases"
+                    if heap.notna().any() else "") + ".")
+    lines += ["", "| point | seeds | " + " | ".join(f"{t.upper()} diff (SE) | z" for t in TARGETS)
+              + " | CPU arm / base |", "|---|---|" + "---|---|" * len(TARGETS) + "---|"]
+    tables = {t: by_point(p, t).set_index("point") for t in TARGETS}
+    for point, g_pt in p.groupby("point", sort=True):
+        cells = [f"{tables[t].loc[point, 'diff']:+.4f} ({tables[t].loc[point, 'se']:.4f}) | "
+                 f"{tables[t].loc[point, 'z']:+.2f}" for t in TARGETS]
+        ratio = g_pt["cpu_time_arm"].sum() / g_pt["cpu_time_base"].sum()
+        lines.append(f"| {point} | {len(g_pt)} | " + " | ".join(cells) + f" | {ratio:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("csv", type=Path, help="the cases table (benchmarks/precision.py --csv)")
+    ap.add_argument("--base", default="shipped", help="the arm the others are paired with")
+    ap.add_argument("--arms", nargs="+", help="the arms to compare (default: every other arm in the table)")
+    ap.add_argument("--out", type=Path, help="write the markdown here")
+    args = ap.parse_args(argv)
+    cases = pd.read_csv(args.csv)
+    missing = [c for c in ("arm", "point", "seed", "status", "flagged", "cpu_time", *TARGETS,
+                           *(f"{t}_sd" for t in TARGETS)) if c not in cases]
+    if missing:
+        ap.error(f"{args.csv} lacks the columns {missing}")
+    if args.base not in set(cases["arm"]):
+        ap.error(f"--base {args.base!r} is not an arm of {args.csv} (arms: {sorted(set(cases['arm']))})")
+    arms = args.arms or [a for a in dict.fromkeys(cases["arm"]) if a != args.base]
+    text = "\n".join(report(cases, a, args.base) for a in arms)
+    print(text)
+    if args.out:
+        write_text_atomically(args.out, text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
