@@ -47,7 +47,8 @@ Where each concept is held (one module each):
   ``metrics.noise``; a new run's SD at a point: ``surrogate.noise_sd``
 * the loop: ``loop.stepper`` (one step; its criteria ``loop.map_criteria``)
 * the study rule: ``study_rule.rule``
-* the experiments: ``experiments`` (``replay``, ``sampling_study``, ``noisy_study``, ``cost_study``)
+* the experiments: ``experiments`` (``replay``, ``sampling_study``, ``noisy_study``, ``cost_study``;
+  DEM arms: ``arms``, an arm against a base case by case: ``paired``)
 * fidelity: ``fidelity`` (``plan``, ``study``, ``paired_factor``, ``fidelity_plots``)
 * surrogate: ``surrogate`` (``fitting``, ``prediction``); maps: ``maps``; decisions:
   ``decisions``; metrics: ``metrics`` (``case.case_metrics``); sensitivity: ``sensitivity``

@@ -345,24 +345,19 @@ def _window_5d_trend(docs: Path) -> list[float]:
 
 def _transient_fed(docs: Path) -> list[float]:
     """The 5 d window with the transient fed (`window5_fed_transient`) against `shipped`, the
-    pre-registered seeds 1-2 paired by point and seed: the geometric mean CPU ratio and its 95 % t
-    interval, the pairs; the largest point's MFR shift (mean over its seeds) over `shipped`'s mean
-    in %, its z against the cases' recorded SDs (eight points, as the phrase says)."""
+    pre-registered seeds 1-2 paired by point and seed (``spreadmap.experiments.paired``): the
+    geometric mean CPU ratio and its 95 % t interval, the pairs; the largest point's MFR shift (mean
+    over its seeds) over `shipped`'s mean in %, its z against the cases' recorded SDs (eight points,
+    as the phrase says)."""
+    from .experiments.paired import by_point, cpu_ratio, pairs
+
     t = _csv(docs / "steady_window" / "transient_fed" / "cases.csv")
-    t = t[(t["status"] == "ok") & t["seed"].isin([1, 2])]
-    m = t[t["arm"] == "window5_fed_transient"].merge(t[t["arm"] == "shipped"], on=["point", "seed"],
-                                                     suffixes=("", "_base"))
-    logs = np.log(m["cpu_time"] / m["cpu_time_base"])
-    half = stats.t.ppf(0.975, len(m) - 1) * logs.std(ddof=1) / math.sqrt(len(m))
-    shifts = []
-    for _, g in m.groupby("point"):
-        diff = float((g["mfr"] - g["mfr_base"]).mean())
-        se = math.sqrt(float((g["mfr_sd"] ** 2 + g["mfr_sd_base"] ** 2).sum())) / len(g)
-        shifts.append((diff / se, 100 * diff / float(g["mfr_base"].mean())))
-    z, pct = max(shifts)
-    if m["point"].nunique() != 8:  # the phrase says "of eight"
-        raise ValueError(f"{m['point'].nunique()} points paired, the README says eight")
-    return [math.exp(logs.mean()), math.exp(logs.mean() - half), math.exp(logs.mean() + half), len(m), pct, z]
+    p = pairs(t[t["seed"].isin([1, 2])], "window5_fed_transient", "shipped")
+    points = by_point(p, "mfr")
+    if len(points) != 8:  # the phrase says "of eight"
+        raise ValueError(f"{len(points)} points paired, the README says eight")
+    worst = points.loc[points["z"].idxmax()]
+    return [*cpu_ratio(p), len(p), 100 * worst["diff"] / worst["base"], worst["z"]]
 
 
 def _batch8_adhesive(docs: Path) -> list[float]:

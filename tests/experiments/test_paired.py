@@ -1,6 +1,6 @@
-"""tools/paired_arms.py on a synthetic A/B table of known shifts: the CPU ratio's geometric mean and
-the pooled relative shift with their t intervals as scipy computes them, per-point z from the
-recorded SDs, unfinished cases unpaired, a flag new in the arm counted."""
+"""spreadmap.experiments.paired and tools/paired_arms.py on a synthetic A/B table of known shifts: the
+CPU ratio's geometric mean and the pooled relative shift with their t intervals as scipy computes
+them, per-point z from the recorded SDs, unfinished cases unpaired, a flag new in the arm counted."""
 
 import math
 
@@ -9,6 +9,8 @@ import pandas as pd
 import pytest
 from conftest import script_module
 from scipy import stats
+
+from spreadmap.experiments import paired
 
 tool = script_module("tools/paired_arms.py")
 
@@ -33,18 +35,18 @@ def table() -> pd.DataFrame:
 
 def test_numbers_against_scipy(tmp_path):
     t = table()
-    p = tool.pairs(t, "lever", "shipped")
+    p = paired.pairs(t, "lever", "shipped")
     assert len(p) == 11  # 12 seeds x points, one lever case failed
     ratios = p["cpu_time_arm"] / p["cpu_time_base"]
-    g, lo, hi = tool.cpu_ratio(p)
+    g, lo, hi = paired.cpu_ratio(p)
     ci = stats.ttest_1samp(np.log(ratios), 0.0).confidence_interval(0.95)
     assert g == pytest.approx(stats.gmean(ratios), rel=1e-12)
     assert (lo, hi) == pytest.approx((math.exp(ci.low), math.exp(ci.high)), rel=1e-12)
     rel = (p["mfr_arm"] - p["mfr_base"]) / p["mfr_base"]
-    m, mlo, mhi = tool.relative_shift(p, "mfr")
+    m, mlo, mhi = paired.relative_shift(p, "mfr")
     ci90 = stats.ttest_1samp(rel, 0.0).confidence_interval(0.90)
     assert (m, mlo, mhi) == pytest.approx((rel.mean(), ci90.low, ci90.high), rel=1e-12)
-    z = tool.by_point(p, "mfr").set_index("point")["z"]
+    z = paired.by_point(p, "mfr").set_index("point")["z"]
     assert z["d"] == pytest.approx(3.0, rel=1e-9)  # 0.03 / (sqrt(3 x 2 x 1.5e-4) / 3)
     assert z[["a", "b", "c"]].abs().max() < 1e-9
     csv = tmp_path / "cases.csv"
