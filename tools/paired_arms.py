@@ -25,10 +25,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from spreadmap.design import TARGETS  # mfr, pd (spreadmap.targets)
 from spreadmap.experiments.paired import by_point, cpu_ratio, flagged, pairs, relative_shift
 from spreadmap.files import write_text_atomically
-
-TARGETS = ("mfr", "pd")
 
 
 def report(cases: pd.DataFrame, arm: str, base: str) -> str:
@@ -39,26 +38,27 @@ def report(cases: pd.DataFrame, arm: str, base: str) -> str:
         return "\n".join(lines + ["No pair finished.", ""])
     ran = cases[cases["arm"] == arm]
     g, lo, hi = cpu_ratio(p)
+    ratios = p["cpu_time_arm"] / p["cpu_time_base"]
     lines += [f"- **Pairs**: {len(p)} (point, seed) of {len(ran)} {arm} cases at {p['point'].nunique()} points.",
               f"- **CPU per case, arm / base**: geometric mean {g:.3f} (95 % CI {lo:.3f}-{hi:.3f}); "
-              f"the pairs' ratios {p['cpu_time_arm'].div(p['cpu_time_base']).min():.2f}-"
-              f"{p['cpu_time_arm'].div(p['cpu_time_base']).max():.2f}."]
+              f"the pairs' ratios {ratios.min():.2f}-{ratios.max():.2f}."]
+    tables = {t: by_point(p, t) for t in TARGETS}
     for t in TARGETS:
         m, mlo, mhi = relative_shift(p, t)
-        pts = by_point(p, t)
+        pts = tables[t]
         worst = pts.loc[pts["z"].abs().idxmax()] if pts["z"].notna().any() else None
         text = (f"; the largest point z {worst['z']:+.2f} ({worst['point']})" if worst is not None else "")
         lines.append(f"- **{t.upper()}, (arm - base) / base pooled**: {100 * m:+.2f} % (90 % CI {100 * mlo:+.2f} "
                      f"to {100 * mhi:+.2f} %){text}.")
     new_flags = flagged(p["flagged_arm"]) & ~flagged(p["flagged_base"])
-    heap = pd.to_numeric(p.get("heap_end_h2_arm"), errors="coerce") if "heap_end_h2_arm" in p else pd.Series(dtype=float)
+    heap = pd.to_numeric(p["heap_end_h2_arm"], errors="coerce") if "heap_end_h2_arm" in p else pd.Series(dtype=float)
     lines.append(f"- **Flags**: {int(new_flags.sum())} pairs flagged in the arm and not in the base"
                  + (f" ({', '.join(f'{r.point} s{r.seed}' for r in p[new_flags].itertuples())})" if new_flags.any() else "")
                  + (f"; heap at the window's end at least {heap.min():.2f} h^2 in the arm's paired cases"
                     if heap.notna().any() else "") + ".")
     lines += ["", "| point | seeds | " + " | ".join(f"{t.upper()} diff (SE) | z" for t in TARGETS)
               + " | CPU arm / base |", "|---|---|" + "---|---|" * len(TARGETS) + "---|"]
-    tables = {t: by_point(p, t).set_index("point") for t in TARGETS}
+    tables = {t: table.set_index("point") for t, table in tables.items()}
     for point, g_pt in p.groupby("point", sort=True):
         cells = [f"{tables[t].loc[point, 'diff']:+.4f} ({tables[t].loc[point, 'se']:.4f}) | "
                  f"{tables[t].loc[point, 'z']:+.2f}" for t in TARGETS]
