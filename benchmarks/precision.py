@@ -143,6 +143,9 @@ ARMS = {
     "fed_transient": {"rev": None, "overrides": {"scene": {"feed_transient": True}}},
     "window5_fed_transient": {"rev": None, "overrides": {"presets": {"default": {"transient_d": 5}},
                                                          "scene": {"feed_transient": True}}},
+    # the window opened 5 d beyond the pile with the pile sized for 3 d as shipped
+    # (presets.default.pile_transient_d): the shipped run's pile, settle and feed, measured 2 d later
+    "window5_pile3": {"rev": None, "overrides": {"presets": {"default": {"transient_d": 5, "pile_transient_d": 3}}}},
 }
 CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_fill",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",

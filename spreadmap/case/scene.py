@@ -219,7 +219,15 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # the pile holds what fills the gap under the blade and the standing reserve, and the feed
         # starts with the blade (the pile held the transient's passing and settled with it: a 5 d
         # transient cost 1.28x the CPU of 3 d where the travel alone said 1.07x, docs/steady_window)
-        before_window = blade if (fed and scene.get("feed_transient")) else transient + blade
+        # presets.<name>.pile_transient_d (with the fed heap): the pile holds what passes in this much
+        # travel beyond it, not in the whole transient; the feed tops the heap up beyond it, so a window
+        # opened later costs its travel only (null: the transient itself)
+        if fed and scene.get("feed_transient"):
+            before_window = blade
+        elif fed and preset.get("pile_transient_d") is not None:
+            before_window = preset["pile_transient_d"] * d + blade
+        else:
+            before_window = transient + blade
         need = scene["pile_margin"] * ((0.0 if fed else target * sphere_volume / width) + mfr_high * h * before_window)
         need *= heap / (h + heap)  # the whole pile, not only its heap above the gap, is the reserve
         window_cap = max(window, preset["window_max_d"] * d)

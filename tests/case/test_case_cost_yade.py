@@ -130,6 +130,30 @@ def test_feed_transient_piles_only_the_reserve_and_the_gap_under_the_blade(confi
     assert case_params(off, point, "default") == case_params(config, point, "default")
 
 
+def test_pile_transient_sizes_the_pile_and_transient_d_the_window(config):
+    """Pure arithmetic (no YADE): a window opened 5 d beyond the pile with the pile sized for 3 d
+    (presets.default.pile_transient_d) is the 3 d scene's pile, sphere for sphere, with the 5 d
+    opening; null (the default) or equal to transient_d gives the parameters as before."""
+    point = {"f": 0.3, "d_um": 30.0, "h_um": 65.0, "v_mm_s": 10.0}
+    three = copy.deepcopy(config)
+    three["presets"]["default"]["transient_d"] = 3
+    later = copy.deepcopy(three)
+    later["presets"]["default"].update(transient_d=5, pile_transient_d=3)
+    p3, p5 = case_params(three, point, "default"), case_params(later, point, "default")
+    for key in ("pile_length", "n_particles", "feed_count", "cloud_height", "target_passed"):
+        assert p5[key] == p3[key], key
+    assert p5["transient_travel"] == pytest.approx(5 * 30e-6) and p3["transient_travel"] == pytest.approx(3 * 30e-6)
+    five = copy.deepcopy(config)
+    five["presets"]["default"]["transient_d"] = 5
+    assert case_params(five, point, "default")["n_particles"] > p5["n_particles"]  # the 5 d pile holds 2 d more
+    same = copy.deepcopy(config)
+    same["presets"]["default"]["pile_transient_d"] = config["presets"]["default"]["transient_d"]
+    assert case_params(same, point, "default")["pile_length"] == case_params(config, point, "default")["pile_length"]
+    unset = copy.deepcopy(config)
+    unset["presets"]["default"]["pile_transient_d"] = None
+    assert case_params(unset, point, "default") == case_params(config, point, "default")
+
+
 def test_fed_heap_keeps_the_heap_every_sphere_and_the_measurement(config, tmp_path):
     """The same smoke case (same seed; a 12 d window, so that the fed heap runs below its reserve
     and is fed) from a full pile and from a fed heap: the fed run starts with fewer spheres, adds

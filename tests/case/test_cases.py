@@ -58,6 +58,7 @@ def _changed(config, path, value):
     (("scene", "substrate", "kind"), "flat"),
     (("scene", "fed_heap"), False),  # the shipped scene feeds the heap
     (("scene", "feed_transient"), True),  # the pile without the transient's passing
+    (("presets", "default", "pile_transient_d"), 2.0),  # the pile sized for a shorter transient
     (("scene", "settle_damping"), 0.3),
     (("presets", "default", "width_d"), 4.0),
     (("presets", "default", "dt_factor"), 0.2),
