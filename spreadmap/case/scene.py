@@ -202,7 +202,7 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
     # A fed heap (scene.fed_heap): spheres are added ahead of the blade during the move whenever
     # the heap falls below the standing reserve, so the pile holds only what passes before the
     # window opens plus that reserve; the window's own consumption is fed, not piled.
-    fed = bool(scene.get("fed_heap", False))
+    fed = bool(scene["fed_heap"])  # the schema holds its default (true)
     reserve = standing_reserve_h2(scene, d, h, float(point["f"]))
     if target is None:
         need = preset["heap_reserve"] * DENSEST_PACKING * h * (transient + (0.0 if fed else window) + blade)
@@ -222,9 +222,9 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # presets.<name>.pile_transient_d (with the fed heap): the pile holds what passes in this much
         # travel beyond it, not in the whole transient; the feed tops the heap up beyond it, so a window
         # opened later costs its travel only (null: the transient itself)
-        if fed and scene.get("feed_transient"):
+        if fed and scene["feed_transient"]:
             before_window = blade
-        elif fed and preset.get("pile_transient_d") is not None:
+        elif fed and preset["pile_transient_d"] is not None:
             before_window = preset["pile_transient_d"] * d + blade
         else:
             before_window = transient + blade
