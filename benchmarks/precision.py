@@ -146,6 +146,10 @@ ARMS = {
     # the window opened 5 d beyond the pile with the pile sized for 3 d as shipped
     # (presets.default.pile_transient_d): the shipped run's pile, settle and feed, measured 2 d later
     "window5_pile3": {"rev": None, "overrides": {"presets": {"default": {"transient_d": 5, "pile_transient_d": 3}}}},
+    # the peak overlap read twice per shortest contact instead of four times (every 4 steps at
+    # `default` instead of 2; the check's sampling factor ~1.37 instead of 1.05-1.09): it only reads,
+    # so MFR and PD must come out bit for bit the same (issue 50's overlap lever, a step further)
+    "reads2": {"rev": None, "overrides": {"presets": {"default": {"overlap_reads_per_contact": 2}}}},
 }
 CASE_COLUMNS = ["n_particles", "steps", "mfr", "pd", "n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "layer_fill",
                 "coverage", "roughness_d", "thickness_ratio", "regime", "peak_overlap_ratio", "peak_overlap_settle",
