@@ -18,6 +18,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from spreadmap import config as spreadmap_config
 from spreadmap.case.migrate import carry_to_current_template, migrate_case_folders
 
 
@@ -25,6 +26,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("workdir", type=Path, help="the workflow directory (its results/cases/ is migrated)")
     parser.add_argument("--dry-run", action="store_true", help="say what would be renamed, rename nothing")
+    parser.add_argument("--configfile", type=Path, default=None,
+                        help="the config the cases are carried to (default: WORKDIR/config.yaml)")
     args = parser.parse_args(argv)
     cases = args.workdir / "results" / "cases"
     if not cases.is_dir():
@@ -36,7 +39,8 @@ def main(argv=None) -> int:
     for old, why in report["left"]:
         print(f"migrate_case_ids: left {old}: {why}")
     print(f"migrate_case_ids: {len(report['renamed'])} case folders {verb}, {len(report['left'])} left as they are")
-    carried = carry_to_current_template(cases, dry_run=args.dry_run)
+    config = spreadmap_config.load(args.configfile or args.workdir / "config.yaml")
+    carried = carry_to_current_template(cases, config, dry_run=args.dry_run)
     for old, new in carried["renamed"]:
         print(f"migrate_case_ids: {verb} {old} -> {new} (an earlier scene template that simulates the same)")
     for old, why in carried["left"]:

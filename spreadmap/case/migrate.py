@@ -118,6 +118,9 @@ def migrate_case_folders(cases_dir: Path | str, dry_run: bool = False) -> dict:
     ----------
     cases_dir : pathlib.Path or str
         The cases' folder (results/cases).
+    config : dict
+        The loaded configuration the cases are carried to: each case's preset's
+        ``overlap_reads_per_contact`` sets today's stride (a case of a preset it lacks is left alone).
     dry_run : bool, optional
         True: report what would be renamed, change nothing.
 
@@ -173,20 +176,21 @@ EQUIVALENT_TEMPLATES = {
 }
 
 
-def with_todays_stride(params: dict) -> dict:
+def with_todays_stride(params: dict, reads_per_contact: int) -> dict:
     """The parameters with today's overlap stride (spreadmap.case.scene.overlap_stride): a case that
     read the peak overlap more often (every step, before issue 50) simulated the same spheres to the
     bit (benchmarks/overlap_stride.py) and held its stability check to the per-step record, at least
     as strict; records without the stride are returned as they are. The stride is never made finer
     than the record's: a case cannot be carried to a read it did not make, and a preset may read
-    less often than a quarter contact (the tests' `smoke`, overlap_reads_per_contact 3)."""
+    less often than its preset asks (`reads_per_contact`, the config's overlap_reads_per_contact of the
+    case's preset: 2 at the shipped `default` since 2026-12-07, 4 before, 3 at the tests' `smoke`)."""
     if "overlap_every" not in params or "contact_time" not in params:
         return params
-    today = overlap_stride(params["contact_time"], params["time_step"])
+    today = overlap_stride(params["contact_time"], params["time_step"], int(reads_per_contact))
     return {**params, "overlap_every": max(int(params["overlap_every"]), today)}
 
 
-def carry_to_current_template(cases_dir: Path | str, dry_run: bool = False,
+def carry_to_current_template(cases_dir: Path | str, config: dict, dry_run: bool = False,
                               current: str | None = None) -> dict:
     """Re-key the finished cases of a template that the current one simulates identically, and those
     that read the peak overlap at another stride (``with_todays_stride``).
@@ -205,6 +209,9 @@ def carry_to_current_template(cases_dir: Path | str, dry_run: bool = False,
     ----------
     cases_dir : pathlib.Path or str
         The cases' folder (results/cases).
+    config : dict
+        The loaded configuration the cases are carried to: each case's preset's
+        ``overlap_reads_per_contact`` sets today's stride (a case of a preset it lacks is left alone).
     dry_run : bool, optional
         True: report what would be renamed, change nothing.
     current : str or None, optional
@@ -231,7 +238,11 @@ def carry_to_current_template(cases_dir: Path | str, dry_run: bool = False,
             _, added = EQUIVALENT_TEMPLATES[params["scene_sha256"]]
         else:
             continue
-        new = keyed_id(with_todays_stride({**params, **added, "scene_sha256": current}))
+        preset = config["presets"].get(params.get("preset"))
+        if preset is None:
+            continue
+        new = keyed_id(with_todays_stride({**params, **added, "scene_sha256": current},
+                                          preset["overlap_reads_per_contact"]))
         if folder.name == new:  # carried already (its record keeps the old template's parameters)
             continue
         if keyed_id(params) != folder.name:

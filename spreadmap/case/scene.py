@@ -42,8 +42,9 @@ def hertz_contact_time(radius: float, density: float, material: dict, speed: flo
 
 def overlap_stride(contact: float, time_step: float, reads_per_contact: int = 4) -> int:
     """Steps between two reads of the peak overlap: 1 / `reads_per_contact` of the shortest contact the
-    scene expects (`contact`, ``hertz_contact_time``), at least 1. The presets' default is a quarter
-    (issue 50; every eighth before); the tests' `smoke` reads a third (2 steps, not every step)."""
+    scene expects (`contact`, ``hertz_contact_time``), at least 1. The schema's default is a quarter
+    (issue 50; every eighth before), the shipped presets' half (2026-12-07); the tests' `smoke` reads a
+    third (2 steps, not every step)."""
     return max(1, int(contact / (reads_per_contact * time_step)))
 
 
@@ -321,11 +322,12 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         "substrate_jitter": float(substrate.get("jitter", 0.5)),
         "substrate_ahead": float(substrate.get("ahead_d", 12.0)),
         # the peak overlap is read every overlap_every steps, at most 1 / overlap_reads_per_contact of
-        # the shortest contact expected (a quarter: 2 steps at `default`, 3-4 at `reference`; a third at
-        # the tests' `smoke`: 2 steps, x1.09-1.11); the stability check divides what it read
-        # by the factor a Hertz peak can exceed the nearest sample (spreadmap.metrics.case's
-        # overlap_sampling_factor, 1.05-1.09): within 0.5 % as strict as reading every step, which
-        # cost 15-18 % of a case's CPU (docs/case_cost)
+        # the shortest contact expected (half since 2026-12-07: 4 steps at `default`, x~1.4; a quarter
+        # before, 2 steps, x1.05-1.09; a third at the tests' `smoke`: 2 steps, x1.09-1.11); the
+        # stability check multiplies what it read by the factor a Hertz peak can exceed the nearest
+        # sample (spreadmap.metrics.case's overlap_sampling_factor): never laxer than reading every
+        # step, at most 3 % stricter at two reads a contact; every step cost 15-18 % of a case's CPU
+        # (docs/case_cost), every second 0.866x that, every fourth 0.92x every second (docs/steady_window)
         "overlap_every": overlap_stride(contact, dt, int(preset["overlap_reads_per_contact"])),
         "contact_time": contact,
         "target_passed": None if target is None else float(target),

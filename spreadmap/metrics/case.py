@@ -144,7 +144,8 @@ def overlap_sampling_factor(params: dict) -> float:
     One sample lies within k / 2 steps of an impact's peak (k = ``overlap_every``), where the overlap
     is at least cos(omega k dt / 2) of the peak (``HERTZ_PEAK_OMEGA_TC`` / t_c, t_c the shortest
     contact the scene expects, ``contact_time``; a longer contact falls slower). The stability check
-    divides the recorded peak by that: 1.05-1.09 at the scene's stride (k = 2 at `default`), 1 where
+    multiplies the recorded peak by that: ~1.4 at the shipped stride (k = 4 at `default`, two reads
+    a contact; 1.05-1.09 at k = 2, four reads, before 2026-12-07), 1 where
     every step is read (k = 1, and records from before the stride). Checked against YADE's own
     impacts (tests/case/test_overlap_resolution_yade.py: within 0.5 % of the per-step record at
     8 steps per contact, where the integration itself departs from Hertz's curve).

@@ -48,20 +48,20 @@ def test_a_dry_case_of_the_old_template_gets_todays_id(config, tmp_path):
     other.mkdir()
     (other / "raw.json").write_text(json.dumps({"params": {"scene_sha256": "ffffffffffffffff"}}))
     mtime = (folder / "run.log").stat().st_mtime_ns
-    report = carry_to_current_template(cases)
+    report = carry_to_current_template(cases, config)
     want = case_id(POINT, "default", dry)
     assert report == {"renamed": [(folder.name, want)], "left": []}
     assert sorted(p.name for p in cases.iterdir()) == sorted([want, other.name])
     assert (cases / want / "run.log").read_text() == f"[{want}] done\n"
     assert (cases / want / "run.log").stat().st_mtime_ns == mtime
-    assert carry_to_current_template(cases) == {"renamed": [], "left": []}  # a second run: nothing to do
+    assert carry_to_current_template(cases, config) == {"renamed": [], "left": []}  # a second run: nothing to do
     # the adhesive default asks for another case: the dry one is kept beside it, not taken for it
     assert want != case_id(POINT, "default", config)
 
 
 def test_dry_run_renames_nothing(config, tmp_path):
     folder = old_record(config, tmp_path)
-    report = carry_to_current_template(folder.parent, dry_run=True)
+    report = carry_to_current_template(folder.parent, config, dry_run=True)
     assert len(report["renamed"]) == 1 and folder.exists()
 
 
@@ -69,7 +69,7 @@ def test_an_adhesive_case_of_the_first_adhesive_template_keeps_its_surface_energ
     """The template of the main job of 2026-12-06, before a comment was corrected: its adhesive
     cases carry to the ids today's adhesive default asks for."""
     folder = old_record(config, tmp_path, template="0ae31d5c9de2bce9")
-    report = carry_to_current_template(folder.parent)
+    report = carry_to_current_template(folder.parent, config)
     assert report == {"renamed": [(folder.name, case_id(POINT, "default", config))], "left": []}
 
 
@@ -78,7 +78,7 @@ def test_an_adhesive_case_of_the_template_before_the_size_distribution_gets_toda
     one-size cases carry to the ids of today's one-size default."""
     assert config["material"]["size_distribution"]["span"] == 0.0
     folder = old_record(config, tmp_path, template="e9640a66ef79dc3a")
-    report = carry_to_current_template(folder.parent)
+    report = carry_to_current_template(folder.parent, config)
     assert report == {"renamed": [(folder.name, case_id(POINT, "default", config))], "left": []}
 
 
@@ -90,8 +90,8 @@ def test_a_case_of_todays_template_read_every_step_gets_todays_id(config, tmp_pa
     assert json.loads((folder / "raw.json").read_text())["params"]["overlap_every"] == 1
     want = case_id(POINT, "default", config)
     assert folder.name != want
-    report = carry_to_current_template(folder.parent)
+    report = carry_to_current_template(folder.parent, config)
     assert report == {"renamed": [(folder.name, want)], "left": []}
     carried = json.loads((folder.parent / want / "raw.json").read_text())["params"]
     assert carried["overlap_every"] == 1 and carried["case_id"] == want
-    assert carry_to_current_template(folder.parent) == {"renamed": [], "left": []}
+    assert carry_to_current_template(folder.parent, config) == {"renamed": [], "left": []}

@@ -114,7 +114,7 @@ def test_feed_transient_piles_only_the_reserve_and_the_gap_under_the_blade(confi
     packing = config["scene"]["packing_guess"]
     for transient_d in (3, 5):
         base = copy.deepcopy(config)
-        base["presets"]["default"]["transient_d"] = transient_d
+        base["presets"]["default"].update(transient_d=transient_d, pile_transient_d=None)
         base["scene"]["fed_heap"] = True
         fed_all = copy.deepcopy(base)
         fed_all["scene"]["feed_transient"] = True
@@ -132,26 +132,23 @@ def test_feed_transient_piles_only_the_reserve_and_the_gap_under_the_blade(confi
 
 def test_pile_transient_sizes_the_pile_and_transient_d_the_window(config):
     """Pure arithmetic (no YADE): a window opened 5 d beyond the pile with the pile sized for 3 d
-    (presets.default.pile_transient_d) is the 3 d scene's pile, sphere for sphere, with the 5 d
-    opening; null (the default) or equal to transient_d gives the parameters as before."""
+    (presets.default.pile_transient_d, shipped) is the 3 d scene's pile, sphere for sphere, with the
+    5 d opening; null (the schema's default) sizes the pile by transient_d itself."""
     point = {"f": 0.3, "d_um": 30.0, "h_um": 65.0, "v_mm_s": 10.0}
-    three = copy.deepcopy(config)
-    three["presets"]["default"]["transient_d"] = 3
-    later = copy.deepcopy(three)
-    later["presets"]["default"].update(transient_d=5, pile_transient_d=3)
-    p3, p5 = case_params(three, point, "default"), case_params(later, point, "default")
+    def with_transients(transient_d, pile_transient_d):
+        cfg = copy.deepcopy(config)
+        cfg["scene"]["fed_heap"] = True
+        cfg["presets"]["default"].update(transient_d=transient_d, pile_transient_d=pile_transient_d)
+        return case_params(cfg, point, "default")
+
+    p3, p5 = with_transients(3, None), with_transients(5, 3)
     for key in ("pile_length", "n_particles", "feed_count", "cloud_height", "target_passed"):
         assert p5[key] == p3[key], key
     assert p5["transient_travel"] == pytest.approx(5 * 30e-6) and p3["transient_travel"] == pytest.approx(3 * 30e-6)
-    five = copy.deepcopy(config)
-    five["presets"]["default"]["transient_d"] = 5
-    assert case_params(five, point, "default")["n_particles"] > p5["n_particles"]  # the 5 d pile holds 2 d more
-    same = copy.deepcopy(config)
-    same["presets"]["default"]["pile_transient_d"] = config["presets"]["default"]["transient_d"]
-    assert case_params(same, point, "default")["pile_length"] == case_params(config, point, "default")["pile_length"]
-    unset = copy.deepcopy(config)
-    unset["presets"]["default"]["pile_transient_d"] = None
-    assert case_params(unset, point, "default") == case_params(config, point, "default")
+    five = with_transients(5, None)
+    assert five["n_particles"] > p5["n_particles"]  # the 5 d pile holds 2 d more
+    assert with_transients(5, 5)["pile_length"] == five["pile_length"]
+    assert with_transients(3, 3)["pile_length"] == p3["pile_length"]
 
 
 def test_fed_heap_keeps_the_heap_every_sphere_and_the_measurement(config, tmp_path):

@@ -51,5 +51,9 @@ def test_the_worst_sample_times_the_factor_reaches_the_peak(steps_per_contact, e
         samples = np.interp(np.arange(phase, tc, every * dt), t, x)
         worst = min(worst, samples.max())
     assert worst * factor >= peak * (1 - 1e-9)
-    if every <= steps_per_contact / 4:  # the scene's strides: not much stricter than it needs to be
+    # the scene's strides: not much stricter than it needs to be; at four reads a contact (the
+    # presets' until 2026-12-07) within 2 %, at two (`default` since) within 4 % (3.2 % at worst)
+    if every <= steps_per_contact / 4:
         assert worst * factor <= peak * 1.02
+    elif every <= steps_per_contact / 2:
+        assert worst * factor <= peak * 1.04
