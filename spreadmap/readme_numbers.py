@@ -296,28 +296,15 @@ def _stop(docs: Path, day: str) -> dict:
 MAIN_JOB = "docs/main_job/run_2026-12-04/"
 ADHESIVE = "docs/main_job/run_2026-12-06/"
 ADHESIVE_B = "docs/main_job/run_2026-12-06b/"
-FRONT_RUN = "2026-12-07c"  # the main job the README's front paragraph reports
+FRONT_RUN = "2026-12-07e"  # the main job the README's front paragraph reports
 ADHESIVE_C = f"docs/main_job/run_{FRONT_RUN}/"
-SETUP_C = 44  # s, the set-up before the run's first job (the run's log: 08:09:14 -> 08:09:58)
+SETUP_C = 47  # s, the set-up before the run's first job (the command at 18:16:43, the run's log from 18:17:30.1)
 
 
 def _analyses_written(docs: Path) -> float:
     """Minutes from the command to the last of the maps, decisions and explorer page (FRONT_RUN)."""
     t = _csv(_run(docs, FRONT_RUN) / "timeline.csv")
     return float(t[t["rule"].isin(["maps", "decide", "explorer"])]["end_min"].max()) + SETUP_C / 60
-
-
-SETUP_C_AGAIN = 47.6  # s, the set-up of run_2026-12-07c_again (the command at 12:04:43, the run's log from 12:05:30.6)
-
-
-def _same_run_again(docs: Path) -> list[float]:
-    """run_2026-12-07c once more (session 30): minutes to the maps, decisions and explorer page, and
-    its CPU over run_2026-12-07c's (the same cases, summed)."""
-    t = _csv(_run(docs, "2026-12-07c_again") / "timeline.csv")
-    minutes = float(t[t["rule"].isin(["maps", "decide", "explorer"])]["end_min"].max()) + SETUP_C_AGAIN / 60
-    again = _csv(_run(docs, "2026-12-07c_again") / "cases.csv").set_index("case_id")["cpu_time"]
-    first = _csv(_run(docs, "2026-12-07c") / "cases.csv").set_index("case_id")["cpu_time"]
-    return [minutes, float(again.sum() / first.loc[again.index].sum())]
 
 
 def _window_5d_cost(docs: Path) -> list[float]:
@@ -374,6 +361,25 @@ def _batch8_adhesive(docs: Path) -> list[float]:
     high = beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
     return [conv["map_error"]["margin"], conv["batch"], conv["min_stop_cases"], k, n, len(st), low, high]
 
+def _front_trend(docs: Path) -> list[float]:
+    """Mean flow-trend z (and its SE) of the front run's cases."""
+    z = _csv(_run(docs, FRONT_RUN) / "cases.csv")["flow_trend_z_batch"].dropna()
+    return [float(z.mean()), float(z.std(ddof=1) / math.sqrt(len(z)))]
+
+
+def _steady_window_levers(docs: Path) -> list[float]:
+    """Session 32's two A/Bs against `shipped` (docs/steady_window/window5_pile3): the overlap read twice a
+    contact (CPU ratio, 95 % CI, pairs) and the later window on the pile of 3 d (CPU ratio, 95 % CI,
+    pairs, MFR shift in % with its 90 % CI)."""
+    from .experiments.paired import cpu_ratio, pairs, relative_shift
+
+    folder = docs / "steady_window" / "window5_pile3"
+    reads = pairs(_csv(folder / "reads2_cases.csv"), "reads2", "shipped")
+    later = pairs(_csv(folder / "cases.csv"), "window5_pile3", "shipped")
+    return [*cpu_ratio(reads), len(reads), *cpu_ratio(later), len(later),
+            *(100 * x for x in relative_shift(later, "mfr"))]
+
+
 CLAIMS: list[Claim] = [
     Claim("front figure: the dry main job's cases and CPU hours",
           "({} cases to its map criteria, {} CPU hours",
@@ -387,21 +393,26 @@ CLAIMS: list[Claim] = [
           lambda d: [_stop(d, FRONT_RUN)["n"], _stop(d, FRONT_RUN)["cpu_hours"]]),
     Claim("adhesive main job (batches of 8): minutes to the maps, decisions and explorer",
           "explorer page **{} min** after the",
-          ADHESIVE_C + "timeline.csv: the last end_min of maps, decide, explorer + the set-up (44 s, the run's log)",
+          ADHESIVE_C + "timeline.csv: the last end_min of maps, decide, explorer + the set-up (47 s, the run's log)",
           lambda d: [_analyses_written(d)]),
     Claim("adhesive main job (batches of 8): the whole run's minutes", "the surrogate's validation last, {} min",
-          ADHESIVE_C + "timeline.json: wall_s / 60, + the set-up before the first job (44 s, the run's log)",
+          ADHESIVE_C + "timeline.json: wall_s / 60, + the set-up before the first job (47 s, the run's log)",
           lambda d: [(_json(_run(d, FRONT_RUN) / "timeline.json")["wall_s"] + SETUP_C) / 60]),
     Claim("adhesive main job (batches of 8): map error of MFR and PD at the stop, tolerance",
           "map error MFR {} and PD {} against the {} tolerance",
           ADHESIVE_C + "stopped.json: criteria.at_this_batch.map_error.targets.*.estimate, tolerance",
           lambda d: (lambda t: [t["mfr"]["estimate"], t["pd"]["estimate"], t["mfr"]["tolerance"]])(
               _stop(d, FRONT_RUN)["criteria"]["at_this_batch"]["map_error"]["targets"])),
-    Claim("the shipped run again (session 30): minutes to the maps, CPU over run_2026-12-07c's",
-          "session reached its maps at {} min ({}x the CPU)",
-          "docs/main_job/run_2026-12-07c_again/timeline.csv (+ the set-up, 47.6 s, the run's log), cases.csv: "
-          "cpu_time summed over run_2026-12-07c's same cases",
-          _same_run_again),
+    Claim("the front run: mean flow-trend z (SE)", "its cases' mean flow-trend z +{} (SE {})",
+          ADHESIVE_C + "cases.csv: flow_trend_z_batch, mean and SE", _front_trend),
+    Claim("session 32: the overlap read twice a contact against four times (CPU, 95 % CI, pairs)",
+          "(two reads a contact) **{}x** that (95 % CI {}-{}, {} pairs, to the bit",
+          "docs/steady_window/window5_pile3/reads2_cases.csv: spreadmap.experiments.paired, reads2 against shipped",
+          lambda d: _steady_window_levers(d)[:4]),
+    Claim("session 32: the later window on a 3 d pile (CPU, 95 % CI, pairs, MFR % and its 90 % CI)",
+          "3 d at **{}x** (95 % CI {}-{}, {} pairs; MFR +{} %, 90 % CI {} to +{};",
+          "docs/steady_window/window5_pile3/cases.csv: spreadmap.experiments.paired, window5_pile3 against shipped",
+          lambda d: _steady_window_levers(d)[4:]),
     Claim("the 5 d window: CPU per case paired with the 3 d window's run, pairs",
           "at **{}x the CPU per case** ({} points paired)",
           "docs/main_job/run_2026-12-07d/cases.csv, run_2026-12-07c_again/cases.csv: median cpu_time ratio "
@@ -470,11 +481,6 @@ CLAIMS: list[Claim] = [
           "{} PD with the runs' noise in it (95 % upper bounds {}, {}), {} and {} of {} inside",
           MAIN_JOB + "heldout/score.json: points, rmse, inside; score.csv n_runs; bound rmse sqrt(n / chi2_0.05(n))",
           _heldout_dry),
-    Claim("the replay's prediction of the dry main job",
-          "had predicted {} cases (p90 {}) and {} modelled CPU hours (p90 {})",
-          "docs/replay/honesty.csv (x1.7, 0.02, active_per_cpu): cases_median, cases_p90, cpu_h_median, cpu_h_p90",
-          lambda d: (lambda r: [r["cases_median"], r["cases_p90"], r["cpu_h_median"], r["cpu_h_p90"]])(
-              _replay_row(d / "replay" / "honesty.csv"))),
     Claim("dry main job: the CPU share of its corner cases",
           "at d 10-12 um and h/d 6-7 take {} % of the CPU",
           MAIN_JOB + "cases.csv: the cpu_time share of the (three) cases at d <= 12.5 um, h/d >= 5.5",
