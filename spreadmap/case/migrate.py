@@ -118,9 +118,6 @@ def migrate_case_folders(cases_dir: Path | str, dry_run: bool = False) -> dict:
     ----------
     cases_dir : pathlib.Path or str
         The cases' folder (results/cases).
-    config : dict
-        The loaded configuration the cases are carried to: each case's preset's
-        ``overlap_reads_per_contact`` sets today's stride (a case of a preset it lacks is left alone).
     dry_run : bool, optional
         True: report what would be renamed, change nothing.
 

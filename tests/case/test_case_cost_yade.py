@@ -87,6 +87,8 @@ def test_fed_heap_pile_holds_only_what_passes_before_the_window_and_the_reserve(
     point = {"f": 0.3, "d_um": 30.0, "h_um": 65.0, "v_mm_s": 10.0}
     fed_cfg, plain_cfg = copy.deepcopy(config), copy.deepcopy(config)
     fed_cfg["scene"]["fed_heap"], plain_cfg["scene"]["fed_heap"] = True, False
+    for cfg in (fed_cfg, plain_cfg):  # both piles hold the whole transient's passing (the shipped fed pile: 3 d of it)
+        cfg["presets"]["default"]["pile_transient_d"] = None
     plain = case_params(plain_cfg, point, "default")
     fed = case_params(fed_cfg, point, "default")
     assert plain["feed_count"] is None

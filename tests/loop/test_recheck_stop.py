@@ -63,6 +63,8 @@ def test_a_runs_steps_decided_again_with_its_own_noise_law_reproduce_its_path():
     # from 56 cases; docs/replay/adhesive)
     cfg["converge"]["map_error"]["margin"], cfg["converge"]["min_stop_cases"] = 1.7, 0
     cfg["converge"]["batch"] = 16
+    # and the scene's window as it ran (3 d, the pile holding it): the planned cost of a candidate reads it
+    cfg["presets"]["default"].update(transient_d=3, pile_transient_d=None)
     law = steps[0]["noise_model"]
     again = recheck_path(table, cfg, steps, law)
     for mine, published in zip(again, steps):
