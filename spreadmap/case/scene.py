@@ -326,7 +326,8 @@ def scene_parameters(point: dict, preset_name: str, config: dict, case_id: str, 
         # before, 2 steps, x1.05-1.09; a third at the tests' `smoke`: 2 steps, x1.09-1.11); the
         # stability check multiplies what it read by the factor a Hertz peak can exceed the nearest
         # sample (spreadmap.metrics.case's overlap_sampling_factor): never laxer than reading every
-        # step, at most 3 % stricter at two reads a contact; every step cost 15-18 % of a case's CPU
+        # step; stricter by up to the factor where a read falls on the peak (a free peak of 0.039 R
+        # read at x1.43 was flagged in a main job: docs/main_job); every step cost 15-18 % of a case's CPU
         # (docs/case_cost), every second 0.866x that, every fourth 0.92x every second (docs/steady_window)
         "overlap_every": overlap_stride(contact, dt, int(preset["overlap_reads_per_contact"])),
         "contact_time": contact,
