@@ -380,6 +380,17 @@ def _steady_window_levers(docs: Path) -> list[float]:
             *(100 * x for x in relative_shift(later, "mfr"))]
 
 
+def _replay_steady_window(docs: Path) -> list[float]:
+    """The shipped loop's replay on the steady window's truth: stops within the tolerance, replays, 95 % CI."""
+    from scipy.stats import beta
+
+    st = _csv(docs / "replay" / "adhesive" / "steady_window" / "stops_margin1.csv")
+    k, n = int(st["true_within"].astype(bool).sum()), len(st)
+    low = beta.ppf(0.025, k, n - k + 1) if k else 0.0
+    high = beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
+    return [k, n, low, high]
+
+
 CLAIMS: list[Claim] = [
     Claim("front figure: the dry main job's cases and CPU hours",
           "({} cases to its map criteria, {} CPU hours",
@@ -403,6 +414,9 @@ CLAIMS: list[Claim] = [
           ADHESIVE_C + "stopped.json: criteria.at_this_batch.map_error.targets.*.estimate, tolerance",
           lambda d: (lambda t: [t["mfr"]["estimate"], t["pd"]["estimate"], t["mfr"]["tolerance"]])(
               _stop(d, FRONT_RUN)["criteria"]["at_this_batch"]["map_error"]["targets"])),
+    Claim("the shipped loop's replay on the steady window's truth: honest stops, replays, 95 % CI",
+          "on the new scene's truth {} of {}, {}-{})",
+          "docs/replay/adhesive/steady_window/stops_margin1.csv: true_within, Clopper-Pearson", _replay_steady_window),
     Claim("the front run: mean flow-trend z (SE)", "its cases' mean flow-trend z +{} (SE {})",
           ADHESIVE_C + "cases.csv: flow_trend_z_batch, mean and SE", _front_trend),
     Claim("session 32: the overlap read twice a contact against four times (CPU, 95 % CI, pairs)",
