@@ -347,9 +347,17 @@ def _transient_fed(docs: Path) -> list[float]:
     return [*cpu_ratio(p), len(p), 100 * worst["diff"] / worst["base"], worst["z"]]
 
 
+def _exact_ci(k: int, n: int) -> tuple[float, float]:
+    """The 95 % exact (Clopper-Pearson) interval of k successes in n, as the replay states it
+    (spreadmap.experiments.replay.honesty: scipy's binomtest)."""
+    from scipy.stats import binomtest
+
+    ci = binomtest(k, n).proportion_ci(0.95, method="exact")
+    return ci.low, ci.high
+
+
 def _batch8_adhesive(docs: Path) -> list[float]:
     import yaml
-    from scipy.stats import beta
 
     conv = yaml.safe_load((docs.parent / "config.yaml").read_text())["converge"]
     st = _csv(docs / "replay" / "adhesive" / "batch8" / "stops.csv")
@@ -357,9 +365,8 @@ def _batch8_adhesive(docs: Path) -> list[float]:
             & (st["margin"].astype(float) == float(conv["map_error"]["margin"]))]
     stops = st[st["stopped"].astype(bool)]
     k, n = int(stops["true_within"].astype(bool).sum()), len(stops)
-    low = beta.ppf(0.025, k, n - k + 1) if k else 0.0
-    high = beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
-    return [conv["map_error"]["margin"], conv["batch"], conv["min_stop_cases"], k, n, len(st), low, high]
+    return [conv["map_error"]["margin"], conv["batch"], conv["min_stop_cases"], k, n, len(st), *_exact_ci(k, n)]
+
 
 def _front_trend(docs: Path) -> list[float]:
     """Mean flow-trend z (and its SE) of the front run's cases."""
@@ -382,13 +389,9 @@ def _steady_window_levers(docs: Path) -> list[float]:
 
 def _replay_steady_window(docs: Path) -> list[float]:
     """The shipped loop's replay on the steady window's truth: stops within the tolerance, replays, 95 % CI."""
-    from scipy.stats import beta
-
     st = _csv(docs / "replay" / "adhesive" / "steady_window" / "stops_margin1.csv")
     k, n = int(st["true_within"].astype(bool).sum()), len(st)
-    low = beta.ppf(0.025, k, n - k + 1) if k else 0.0
-    high = beta.ppf(0.975, k + 1, n - k) if k < n else 1.0
-    return [k, n, low, high]
+    return [k, n, *_exact_ci(k, n)]
 
 
 CLAIMS: list[Claim] = [

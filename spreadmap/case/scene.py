@@ -40,11 +40,11 @@ def hertz_contact_time(radius: float, density: float, material: dict, speed: flo
     return 2.868 * ((0.5 * mass) ** 2 / (0.5 * radius * e_star ** 2 * speed)) ** 0.2
 
 
-def overlap_stride(contact: float, time_step: float, reads_per_contact: int = 4) -> int:
+def overlap_stride(contact: float, time_step: float, reads_per_contact: int) -> int:
     """Steps between two reads of the peak overlap: 1 / `reads_per_contact` of the shortest contact the
-    scene expects (`contact`, ``hertz_contact_time``), at least 1. The schema's default is a quarter
-    (issue 50; every eighth before), the shipped presets' half (2026-12-07); the tests' `smoke` reads a
-    third (2 steps, not every step)."""
+    scene expects (`contact`, ``hertz_contact_time``), at least 1; `reads_per_contact` is the preset's
+    overlap_reads_per_contact (the schema's default a quarter, issue 50, every eighth before; the shipped
+    presets' half since 2026-12-07; the tests' `smoke` a third, 2 steps)."""
     return max(1, int(contact / (reads_per_contact * time_step)))
 
 

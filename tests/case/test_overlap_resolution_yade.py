@@ -1,7 +1,7 @@
 """The stability check cannot miss an impact: the scene reads the peak overlap every
 `overlap_every` steps, at most 1 / overlap_reads_per_contact of the shortest contact it expects (half
 at `default` since 2026-12-07, a quarter before; spreadmap.case.scene), and
-the check divides what it read by the sampling factor (spreadmap.metrics.case.overlap_sampling_factor):
+the check multiplies what it read by the sampling factor (spreadmap.metrics.case.overlap_sampling_factor):
 a Hertz impact sampled at that stride, at any phase, times the factor, is at least the per-step
 record's peak and Hertz theory's; sampled every 1000 steps (the old monitor) it is missed. Runs the
 real YADE binary."""
