@@ -319,15 +319,15 @@ def _window_5d_cost(docs: Path) -> list[float]:
     return [float((m["cpu_time"] / m["cpu_time_3d"]).median()), len(m)]
 
 
+def _trend(docs: Path, day: str) -> list[float]:
+    """Mean flow-trend z of a main job's cases and its SE."""
+    z = _csv(_run(docs, day) / "cases.csv")["flow_trend_z_batch"].dropna()
+    return [float(z.mean()), float(z.std(ddof=1) / math.sqrt(len(z)))]
+
+
 def _window_5d_trend(docs: Path) -> list[float]:
-    """Mean flow-trend z (and its SE) of the 5 d window's run and of the 3 d window's."""
-    out = []
-    for day in ("2026-12-07d", "2026-12-07c"):
-        z = _csv(_run(docs, day) / "cases.csv")["flow_trend_z_batch"].dropna()
-        out.append(float(z.mean()))
-        if day == "2026-12-07d":
-            out.append(float(z.std(ddof=1) / math.sqrt(len(z))))
-    return out
+    """Mean flow-trend z (and its SE) of the 5 d window's run, and the 3 d window's mean."""
+    return [*_trend(docs, "2026-12-07d"), _trend(docs, "2026-12-07c")[0]]
 
 
 def _transient_fed(docs: Path) -> list[float]:
@@ -368,23 +368,27 @@ def _batch8_adhesive(docs: Path) -> list[float]:
     return [conv["map_error"]["margin"], conv["batch"], conv["min_stop_cases"], k, n, len(st), *_exact_ci(k, n)]
 
 
-def _front_trend(docs: Path) -> list[float]:
-    """Mean flow-trend z (and its SE) of the front run's cases."""
-    z = _csv(_run(docs, FRONT_RUN) / "cases.csv")["flow_trend_z_batch"].dropna()
-    return [float(z.mean()), float(z.std(ddof=1) / math.sqrt(len(z)))]
+def _lever_pairs(docs: Path, table: str, arm: str):
+    """Session 32's A/Bs against `shipped` (docs/steady_window/window5_pile3): the pairs of one arm."""
+    from .experiments.paired import pairs
+
+    return pairs(_csv(docs / "steady_window" / "window5_pile3" / table), arm, "shipped")
 
 
-def _steady_window_levers(docs: Path) -> list[float]:
-    """Session 32's two A/Bs against `shipped` (docs/steady_window/window5_pile3): the overlap read twice a
-    contact (CPU ratio, 95 % CI, pairs) and the later window on the pile of 3 d (CPU ratio, 95 % CI,
-    pairs, MFR shift in % with its 90 % CI)."""
-    from .experiments.paired import cpu_ratio, pairs, relative_shift
+def _reads2_lever(docs: Path) -> list[float]:
+    """The overlap read twice a contact: CPU ratio, its 95 % CI, the pairs."""
+    from .experiments.paired import cpu_ratio
 
-    folder = docs / "steady_window" / "window5_pile3"
-    reads = pairs(_csv(folder / "reads2_cases.csv"), "reads2", "shipped")
-    later = pairs(_csv(folder / "cases.csv"), "window5_pile3", "shipped")
-    return [*cpu_ratio(reads), len(reads), *cpu_ratio(later), len(later),
-            *(100 * x for x in relative_shift(later, "mfr"))]
+    p = _lever_pairs(docs, "reads2_cases.csv", "reads2")
+    return [*cpu_ratio(p), len(p)]
+
+
+def _later_window_lever(docs: Path) -> list[float]:
+    """The later window on the pile of 3 d: CPU ratio, its 95 % CI, the pairs, MFR shift in % and its 90 % CI."""
+    from .experiments.paired import cpu_ratio, relative_shift
+
+    p = _lever_pairs(docs, "cases.csv", "window5_pile3")
+    return [*cpu_ratio(p), len(p), *(100 * x for x in relative_shift(p, "mfr"))]
 
 
 def _replay_steady_window(docs: Path) -> list[float]:
@@ -421,15 +425,15 @@ CLAIMS: list[Claim] = [
           "on the new scene's truth {} of {}, {}-{})",
           "docs/replay/adhesive/steady_window/stops_margin1.csv: true_within, Clopper-Pearson", _replay_steady_window),
     Claim("the front run: mean flow-trend z (SE)", "its cases' mean flow-trend z +{} (SE {})",
-          ADHESIVE_C + "cases.csv: flow_trend_z_batch, mean and SE", _front_trend),
+          ADHESIVE_C + "cases.csv: flow_trend_z_batch, mean and SE", lambda d: _trend(d, FRONT_RUN)),
     Claim("session 32: the overlap read twice a contact against four times (CPU, 95 % CI, pairs)",
           "(two reads a contact) **{}x** that (95 % CI {}-{}, {} pairs, to the bit",
           "docs/steady_window/window5_pile3/reads2_cases.csv: spreadmap.experiments.paired, reads2 against shipped",
-          lambda d: _steady_window_levers(d)[:4]),
+          _reads2_lever),
     Claim("session 32: the later window on a 3 d pile (CPU, 95 % CI, pairs, MFR % and its 90 % CI)",
           "3 d at **{}x** (95 % CI {}-{}, {} pairs; MFR +{} %, 90 % CI {} to +{};",
           "docs/steady_window/window5_pile3/cases.csv: spreadmap.experiments.paired, window5_pile3 against shipped",
-          lambda d: _steady_window_levers(d)[4:]),
+          _later_window_lever),
     Claim("the 5 d window: CPU per case paired with the 3 d window's run, pairs",
           "at **{}x the CPU per case** ({} points paired)",
           "docs/main_job/run_2026-12-07d/cases.csv, run_2026-12-07c_again/cases.csv: median cpu_time ratio "
