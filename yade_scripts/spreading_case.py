@@ -338,7 +338,7 @@ state = {"phase": "settle", "phase_start": 0.0, "blade": None, "move_start": Non
          "peak_overlap_ratio": 0.0, "rolled_off": 0, "removed_behind_volume": 0.0, "max_speed_seen": 0.0, "status": None, "reason": "",
          "peak_overlap_by_phase": {}, "peak_overlap_free": 0.0, "peak_overlap_wedged": 0.0,
          "phase_times": {}, "snapshots": {}, "max_speed_by_phase": {}, "behind_series": [], "last_progress": wall_start,
-         "phase_cost": {}, "phase_mark": None, "frozen": 0, "fed": 0, "feed_after": 0.0}
+         "phase_cost": {}, "phase_mark": None, "frozen": 0, "fed": 0, "feed_after": 0.0, "wedge_series": []}
 single_particle_ke_bound = 0.5 * smallest_mass * P["max_speed"] ** 2
 feed_rng = random.Random(2000003 * int(P["seed"]) + 29)  # where fed spheres drop (feed_heap)
 
@@ -471,6 +471,7 @@ def record_overlap():
 
 
 WEDGE_HOPS = 2  # spheres within this many contacts of the blade are pressed by it
+WEDGE_RECORD_FLOOR = 0.03  # R: blade-pressed overlaps recorded for the jam record (free impacts stay below 0.05)
 
 
 def contact_overlap(i):
@@ -490,10 +491,16 @@ def blade_pressed_overlap():
     flagged cases at h/d 1.3-1.65, a 9.5 % R overlap two contacts from the blade while the blade was
     pushed up). The blade is driven at its speed whatever the force, so such a wedge presses until
     the spheres squeeze out; its overlap measures that, not the time step."""
+    return blade_wedge()[0]
+
+
+def blade_wedge():
+    """(overlap, diameter): blade_pressed_overlap's largest overlap / reduced radius and the diameter
+    of the larger sphere of that contact (the wedged sphere; 0 with no contact)."""
     blade = state["blade"]
     if blade is None:
-        return 0.0
-    best = 0.0
+        return 0.0, 0.0
+    best, size = 0.0, 0.0
     seen = {blade}
     frontier = [blade]
     for _ in range(WEDGE_HOPS + 1):  # the last pass reads the contacts of the farthest spheres
@@ -502,13 +509,27 @@ def blade_pressed_overlap():
             for i in O.bodies[body].intrs():
                 if not i.isReal:
                     continue
-                best = max(best, contact_overlap(i))
+                overlap = contact_overlap(i)
+                if overlap > best:
+                    best = overlap
+                    size = 2.0 * max(O.bodies[k].shape.radius for k in (i.id1, i.id2)
+                                     if isinstance(O.bodies[k].shape, Sphere))
                 other = i.id2 if i.id1 == body else i.id1
                 if other not in seen and O.bodies[other].mask == POWDER_MASK:
                     seen.add(other)
                     reached.append(other)
         frontier = reached
-    return best
+    return best, size
+
+
+def record_wedge(x):
+    """The jam record (spreadmap.metrics.jams reads it): at each control call of the move phase whose
+    blade-pressed overlap is at least WEDGE_RECORD_FLOOR R, [control call, blade rear x, overlap / R,
+    wedged sphere's diameter]. A jam is a run of such calls above the config's bound, lasting some
+    travel: a sphere of the coarse tail pinned under the rigid blade and dragged."""
+    overlap, size = blade_wedge()
+    if overlap >= WEDGE_RECORD_FLOOR:
+        state["wedge_series"].append([O.iter // int(P["control_every"]), x, overlap, size])
 
 
 def attribute_overlap(overlap):
@@ -718,6 +739,7 @@ def control():
             state["snapshots"]["blade_start"] = snapshot()
     elif phase == "move":
         x = blade_rear_x()
+        record_wedge(x)
         if P.get("move_steps_limit") and O.iter - state["phase_mark"]["iter"] >= P["move_steps_limit"]:
             finish("stopped", "profile: %d steps of the move phase" % P["move_steps_limit"])
             return
@@ -809,6 +831,7 @@ raw = {
     "rolled_off_particles": state["rolled_off"] + end["rolled_off"],
     "max_speed_by_phase": state["max_speed_by_phase"],
     "behind_series": state["behind_series"],
+    "wedge_series": state["wedge_series"],  # [control call, blade rear x, overlap / R, wedged diameter]
     "phase_cost": state["phase_cost"],
     "adhesion": state.get("adhesion"),
     "frozen_particles": state["frozen"],

@@ -12,6 +12,7 @@ from ..case.scene import DENSEST_PACKING
 from ..config import renamed_keys
 from ..schema import checked, section_schema
 from .flow import heap_h2, layer_density, mass_flow_ratio, measured_span, powder, sphere_volume, window_passed_volume
+from .jams import JAM_COLUMNS, jam_measures
 from .layer import layer_quality
 from .noise import batch_means_sd, counting_sd, flow_trend, flow_trend_batch_z
 from .regime import classify
@@ -29,12 +30,14 @@ NEW_COLUMNS = ("n_passed", "mfr_sd", "pd_sd", "mfr_sd_within", "n_pd", "layer_fi
                # the flow's change between the window's halves in SEs of its within-window noise, the
                # steady flag's statistic (noise.flow_trend_batch_z; flow_trend_z: counting-noise SEs)
                "flow_trend_z_batch")
-# NEW_COLUMNS and SIZE_COLUMNS keep the published tables' order; a target registered later in
+# NEW_COLUMNS, SIZE_COLUMNS and JAM_COLUMNS (issue 66, .jams) keep the published tables' order; a target registered later in
 # spreadmap.targets brings its columns after them (target_columns)
 # the sizes: the feed's volume quantiles, the gap over D90 and the layer's segregation (issue 51, .sizes)
 SIZE_COLUMNS = ("feed_d10_um", "feed_d50_um", "feed_d90_um", "h_over_d90", "layer_d50_ratio", "layer_d50_ratio_sd")
 # metrics.layer_block_d's default (the schema's): block length (in d) of the layer measures' jackknife noise (.layer)
 LAYER_BLOCK_D = checked("metrics")["layer_block_d"]
+# metrics.jam_overlap_ratio and jam_min_travel_d's defaults (the schema's): what a jam event is (.jams)
+JAM_OVERLAP, JAM_MIN_TRAVEL_D = checked("metrics")["jam_overlap_ratio"], checked("metrics")["jam_min_travel_d"]
 SETTING_KEYS = ("pd_clearance_d", "pd_slices", "counting_noise_c", "within_batches", "surface_grid_d")
 # stability.min_heap_h2's default (schemas/config.schema.yaml; docs/guide/01-model.md, "Metrics"):
 # sound shipped cases end their window with 0.97 h^2 or more ahead of the blade (98 main-job
@@ -60,7 +63,7 @@ def target_columns(first=()) -> tuple[str, ...]:
     """The columns of the targets registered in ``spreadmap.targets`` that neither `first` (the
     row's leading columns, e.g. mfr and pd) nor NEW_COLUMNS and SIZE_COLUMNS hold: a case's row
     ends with them (none for the targets of the published tables)."""
-    held = set(first) | set(NEW_COLUMNS) | set(SIZE_COLUMNS)
+    held = set(first) | set(NEW_COLUMNS) | set(SIZE_COLUMNS) | set(JAM_COLUMNS)
     return tuple(c for c in targets.columns() if c not in held)
 
 
@@ -116,6 +119,9 @@ def measure(raw: dict, settings: dict) -> dict:
     out["heap_start_h2"], out["heap_end_h2"] = heap_h2(s1, gap, width), heap_h2(s2, gap, width)
     if "blade_start" in raw["snapshots"]:
         out.update(size_measures(raw["snapshots"]["blade_start"], s2, x0, x1, gap))
+    # jam events: a sphere the moving blade pins and drags (records before the jam record: NaN)
+    out.update(jam_measures(raw, settings.get("jam_overlap_ratio", JAM_OVERLAP),
+                            settings.get("jam_min_travel_d", JAM_MIN_TRAVEL_D)))
     return out
 
 
@@ -279,7 +285,7 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         "relaxed_by_time": raw.get("relaxed_by_time"),
         "yade_version": raw.get("yade_version", ""),
     }
-    own = NEW_COLUMNS + SIZE_COLUMNS + target_columns(out)
+    own = NEW_COLUMNS + SIZE_COLUMNS + JAM_COLUMNS + target_columns(out)
     new = {k: math.nan for k in own}
     new.update(overlap_by_cause(raw, out["peak_overlap_ratio"], stability["max_overlap_ratio"]))
     flags = []

@@ -10,7 +10,16 @@ import yaml
 from conftest import ROOT
 
 from spreadmap.config import ConfigError, validate
-from spreadmap.metrics import MIN_HEAP_H2, NEW_COLUMNS, SIZE_COLUMNS, case_metrics, heap_h2, heap_volume, passed_volume
+from spreadmap.metrics import (
+    JAM_COLUMNS,
+    MIN_HEAP_H2,
+    NEW_COLUMNS,
+    SIZE_COLUMNS,
+    case_metrics,
+    heap_h2,
+    heap_volume,
+    passed_volume,
+)
 from spreadmap.table import FLOOR_COLUMNS, LAST_COLUMNS, build_table
 
 D = 30e-6  # sphere diameter, m
@@ -128,10 +137,11 @@ def test_case_metrics_reports_the_heap_at_the_windows_start_and_end():
     assert m["heap_end_h2"] == pytest.approx(h2(36), rel=1e-12)  # 1.21 h^2
     assert not m["flagged"], m["flag_reason"]
     # appended after every older column, the steady flag's batch z (added later) and the sizes'
-    # columns (issue 51) after them
-    tail = list(m)[-len(SIZE_COLUMNS) - 3:]
+    # columns (issue 51) after them, then the jam record's (issue 66)
+    tail = list(m)[-len(SIZE_COLUMNS) - len(JAM_COLUMNS) - 3:]
     assert tail[:3] == ["heap_start_h2", "heap_end_h2", "flow_trend_z_batch"] == list(NEW_COLUMNS[-3:])
-    assert tail[3:] == list(SIZE_COLUMNS)
+    assert tail[3:3 + len(SIZE_COLUMNS)] == list(SIZE_COLUMNS)
+    assert tail[3 + len(SIZE_COLUMNS):] == list(JAM_COLUMNS)
 
 
 def test_a_heap_below_the_bound_flags_the_case_naming_the_heap_and_the_bound():

@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from spreadmap.metrics import (
+    JAM_COLUMNS,
     NEW_COLUMNS,
     PHASES,
     SIZE_COLUMNS,
@@ -289,7 +290,9 @@ def test_case_metrics_of_a_clean_two_layer_case():
     assert m["layer_fill"] == pytest.approx(8 / 11, rel=2e-3)
     assert m["thickness_ratio"] == pytest.approx(11 * math.pi / 24 / 2, rel=2e-3)
     assert math.isnan(m["mfr_sd_within"])  # no behind_series in this record
-    assert list(m)[-len(NEW_COLUMNS + SIZE_COLUMNS):] == list(NEW_COLUMNS + SIZE_COLUMNS)  # the new columns come last
+    cols = NEW_COLUMNS + SIZE_COLUMNS + JAM_COLUMNS
+    assert list(m)[-len(cols):] == list(cols)  # the new columns come last
+    assert math.isnan(m["jam_events"])  # no wedge record in this record (a record from before it)
 
 
 def test_pd_box_ends_a_clearance_behind_the_blade():
