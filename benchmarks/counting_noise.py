@@ -30,8 +30,8 @@ from pathlib import Path
 import pandas as pd
 from scipy import stats
 
+from spreadlab.noise_law.counting import counting_constant, pooled_constant
 from spreadmap import config as spreadmap_config
-from spreadmap.noise_law.counting import counting_constant, pooled_constant
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -12,7 +12,7 @@ on). Points:
   corner f 0.30, d 12 um, h 70 um, v 10 mm/s (h/d 5.8: the costliest corner of the main job, where the
          heap's h^2 is most of the spheres; run with --points corner, rough floor, two reserves)
 Each case runs in its own YADE process, two at a time, lowest seed first (a run cut short keeps
-balanced arms), every finished case appended to --csv at once (spreadmap.experiments.arms).
+balanced arms), every finished case appended to --csv at once (spreadlab.experiments.arms).
 
     .venv/bin/python benchmarks/heap_size.py --seeds 1 2 3 --csv docs/heap_size/cases.csv \
         --summary docs/heap_size/summary.md --keep /tmp/heap_size
@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+from spreadlab.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap import config as spreadmap_config
 from spreadmap.case.scene import scene_parameters, standing_reserve_h2
-from spreadmap.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap.files import write_text_atomically
 from spreadmap.loop.cost import PlannedCost
 

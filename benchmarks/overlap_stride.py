@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
+from spreadlab.experiments.arms import number, read_rows, run_arm_case, write_rows
 from spreadmap import config as spreadmap_config
-from spreadmap.experiments.arms import number, read_rows, run_arm_case, write_rows
 from spreadmap.files import write_text_atomically
 from spreadmap.metrics.case import overlap_sampling_factor
 

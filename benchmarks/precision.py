@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spreadmap.study.checksums import republish_if_listed, verified_bytes
+from spreadlab.study.checksums import republish_if_listed, verified_bytes
 from spreadmap.targets import current_name
 
 ROOT = Path(__file__).resolve().parent.parent

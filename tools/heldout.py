@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The held-out check of a study (spreadmap.surrogate.heldout_points), in two steps with the runs between:
+"""The held-out check of a study (spreadlab.heldout_points), in two steps with the runs between:
 
     # 1. before any run: choose the points away from every case run, predict them, write both
     python tools/heldout.py choose --model results/surrogate/model.joblib \\
@@ -22,9 +22,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from spreadlab import heldout_points
 from spreadmap import config as spreadmap_config
 from spreadmap.records import current_columns
-from spreadmap.surrogate import heldout_points
 from spreadmap.surrogate.cli import predict_logged, write_csv
 from spreadmap.surrogate.saved_model import ModelFileError, load_model
 from spreadmap.targets import current_name

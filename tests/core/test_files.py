@@ -119,7 +119,7 @@ DIRECT_WRITES = {
     ("spreadmap/logs.py", "open(smk.log[0]"): "a job's log, streamed line by line while it runs",
     ("spreadmap/surrogate/cli.py", "Path(smk.log[0]).write_text"): "predict's log",
     ("spreadmap/case/launcher.py", 'open(log_path, "w")'): "the YADE run's log, streamed",
-    ("spreadmap/experiments/noisy_study.py", "to_csv(partial"): "progress of a long experiment, a scratch file",
+    ("spreadlab/experiments/noisy_study.py", "to_csv(partial"): "progress of a long experiment, a scratch file",
 }
 WRITE = re.compile(r"""\.(to_csv|write_text|write_bytes|savefig)\((?!tmp\b|index=)|json\.dump\(|open\([^)]*["'][wa]b?["']""")
 

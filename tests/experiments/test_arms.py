@@ -1,8 +1,8 @@
-"""The arms study's table (spreadmap.experiments.arms) on hand-made rows: means, SEs from the
+"""The arms study's table (spreadlab.experiments.arms) on hand-made rows: means, SEs from the
 seeds' spread, differences from the reference arm, and the rows it leaves out."""
 import math
 
-from spreadmap.experiments.arms import arm_summary, mean_se, read_rows, usable, write_rows
+from spreadlab.experiments.arms import arm_summary, mean_se, read_rows, usable, write_rows
 
 
 def row(arm, point, seed, mfr, cpu, status="ok", flagged="False"):

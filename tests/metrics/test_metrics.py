@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from spreadlab.noise_law.counting import counting_constant, pooled_constant
 from spreadmap.metrics import (
     NEW_COLUMNS,
     PHASES,
@@ -20,7 +21,6 @@ from spreadmap.metrics import (
     measured_span,
     passed_volume,
 )
-from spreadmap.noise_law.counting import counting_constant, pooled_constant
 
 D = 1.0  # work in units of the diameter
 R = 0.5 * D

@@ -11,8 +11,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..design import NAMES
-from ..table import usable_cases
+from spreadmap.design import NAMES
+from spreadmap.table import usable_cases
 
 
 def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name"), level: float = 0.9) -> pd.DataFrame:

@@ -19,12 +19,12 @@ from typing import Callable
 
 import numpy as np
 
-from ..case.identity import case_scene
-from ..case.launcher import run_case
-from ..case.render import render
-from ..design import NAMES
-from ..files import write_text_atomically
-from ..metrics.case import case_metrics
+from spreadmap.case.identity import case_scene
+from spreadmap.case.launcher import run_case
+from spreadmap.case.render import render
+from spreadmap.design import NAMES
+from spreadmap.files import write_text_atomically
+from spreadmap.metrics.case import case_metrics
 
 
 def add_arguments(ap: argparse.ArgumentParser, points, arms, default_arms, keep: str) -> None:

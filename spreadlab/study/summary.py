@@ -191,7 +191,7 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
 
 def _verdict_words(low: float, high: float, level: float) -> str:
     """The coverage interval's verdict as the summary says it (surrogate.validation.coverage_verdict)."""
-    from ..surrogate.validation import coverage_verdict
+    from spreadmap.surrogate.validation import coverage_verdict
 
     words = {"too wide": f"the intervals are too wide (their coverage's CI lies above {100 * level:g} %)",
              "too narrow": f"the intervals are too narrow (their coverage's CI lies below {100 * level:g} %)",
