@@ -28,6 +28,7 @@ from spreadmap.records import current_columns
 from spreadmap.surrogate.cli import predict_logged, write_csv
 from spreadmap.surrogate.saved_model import ModelFileError, load_model
 from spreadmap.targets import current_name
+from spreadmap.targets import names as target_names
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -102,7 +103,7 @@ def main(argv=None) -> int:
     s.add_argument("--points", required=True)
     s.add_argument("--predictions", required=True)
     s.add_argument("--table", required=True, help="results table holding the held-out runs")
-    s.add_argument("--targets", nargs="+", default=["mfr", "pd"])
+    s.add_argument("--targets", nargs="+", default=list(target_names("base")))
     s.add_argument("--level", type=float, default=0.95)
     s.add_argument("--out", help="per point and target (CSV); the summary beside it (.json)")
     f = sub.add_parser("plot", help="draw scored checks: seed means against the predictions, with their intervals")

@@ -157,7 +157,7 @@ class Correction:
         str
             The line.
         """
-        parts = [f"{t.upper() if t in ('mfr', 'pd') else t} x{k:.3f} (SD {s:.3f})" for t, (k, s) in self.factors.items()]
+        parts = [f"{t.upper() if t in TARGETS else t} x{k:.3f} (SD {s:.3f})" for t, (k, s) in self.factors.items()]
         rest = [t for t in targets if t not in self.factors]
         text = f"`{self.preset}` corrected to `{self.reference}`: " + ", ".join(parts)
         if rest:
