@@ -63,9 +63,23 @@ def _boot_interval(values: np.ndarray, stat, seed: int, level: float = 0.95) -> 
 
 
 def verdict(lo: float, hi: float, null: float, above: str, below: str) -> str:
-    """An interval (lo, hi) against a `null` value: `above` when it lies wholly above, `below` when
-    wholly below, "consistent" when it contains it (the noise law's held-out check reads its
-    intervals so too: spreadlab.noise_law.leave_one_out)."""
+    """What an interval (lo, hi) says of a `null` value (the noise law's held-out check reads its
+    intervals so too: spreadlab.noise_law.leave_one_out).
+
+    Parameters
+    ----------
+    lo, hi : float
+        The interval's ends.
+    null : float
+        The value it is read against.
+    above, below : str
+        The words for an interval wholly above `null` and wholly below it.
+
+    Returns
+    -------
+    str
+        `above`, `below`, or "consistent" when the interval contains `null`.
+    """
     return above if lo > null else below if hi < null else "consistent"
 
 
