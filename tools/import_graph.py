@@ -8,9 +8,12 @@ their modules the product reaches (issue 65).
 The product's entry points: scripts/*.py, the Snakefile and rules/*.smk (their Python imports:
 the `script:` files are scripts/*.py); yade_scripts/ runs inside YADE and imports no package.
 Every import counts, a function-local one too, since it runs when the function does. Importing
-`a.b.c` runs `a` and `a.b` too, so a module's package `__init__` is reached with it; `from a.b
-import c` reaches `a.b.c` when c is a module. The lazy loaders' `import_module(f".{x}")` names are
-not followed: a module reached only through one would be listed as not reached (none is).
+`a.b.c` runs `a` and `a.b` too, so a module's package `__init__` is reached with it (an edge in
+the graph unless the package is the importer's own, which is loading already); `from a.b import
+c` reaches `a.b.c` when c is a module. A package whose __init__ loads submodules on first use (a
+module-level `__getattr__` with `import_module`: spreadmap.surrogate, spreadmap.decisions)
+reaches every submodule whose name is a string in it, for --reached (not for --cycles: loading
+on first use is after the package has loaded).
 """
 from __future__ import annotations
 
