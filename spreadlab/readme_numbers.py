@@ -332,7 +332,7 @@ def _window_5d_trend(docs: Path) -> list[float]:
 
 def _transient_fed(docs: Path) -> list[float]:
     """The 5 d window with the transient fed (`window5_fed_transient`) against `shipped`, the
-    pre-registered seeds 1-2 paired by point and seed (``spreadlab.experiments.paired``): the
+    pre-registered seeds 1-2 paired by point and seed (``spreadmap.experiments.paired``): the
     geometric mean CPU ratio and its 95 % t interval, the pairs; the largest point's MFR shift (mean
     over its seeds) over `shipped`'s mean in %, its z against the cases' recorded SDs (eight points,
     as the phrase says)."""
@@ -349,7 +349,7 @@ def _transient_fed(docs: Path) -> list[float]:
 
 def _exact_ci(k: int, n: int) -> tuple[float, float]:
     """The 95 % exact (Clopper-Pearson) interval of k successes in n, as the replay states it
-    (spreadlab.experiments.replay.honesty: scipy's binomtest)."""
+    (spreadmap.experiments.replay.honesty: scipy's binomtest)."""
     from scipy.stats import binomtest
 
     ci = binomtest(k, n).proportion_ci(0.95, method="exact")
@@ -428,11 +428,11 @@ CLAIMS: list[Claim] = [
           ADHESIVE_C + "cases.csv: flow_trend_z_batch, mean and SE", lambda d: _trend(d, FRONT_RUN)),
     Claim("session 32: the overlap read twice a contact against four times (CPU, 95 % CI, pairs)",
           "(two reads a contact) **{}x** that (95 % CI {}-{}, {} pairs, to the bit",
-          "docs/steady_window/window5_pile3/reads2_cases.csv: spreadlab.experiments.paired, reads2 against shipped",
+          "docs/steady_window/window5_pile3/reads2_cases.csv: spreadmap.experiments.paired, reads2 against shipped",
           _reads2_lever),
     Claim("session 32: the later window on a 3 d pile (CPU, 95 % CI, pairs, MFR % and its 90 % CI)",
           "3 d at **{}x** (95 % CI {}-{}, {} pairs; MFR +{} %, 90 % CI {} to +{};",
-          "docs/steady_window/window5_pile3/cases.csv: spreadlab.experiments.paired, window5_pile3 against shipped",
+          "docs/steady_window/window5_pile3/cases.csv: spreadmap.experiments.paired, window5_pile3 against shipped",
           _later_window_lever),
     Claim("the 5 d window: CPU per case paired with the 3 d window's run, pairs",
           "at **{}x the CPU per case** ({} points paired)",
