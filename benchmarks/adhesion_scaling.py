@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from spreadlab.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap import config as spreadmap_config
-from spreadmap.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap.files import write_text_atomically
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -84,10 +84,10 @@ def summary(rows: list[dict]) -> str:
 
 def density_correction(rows: list[dict]) -> dict:
     """The factor from density x1000 to x10 under adhesion, per target, with its SD at a point not
-    run: spreadmap.fidelity.paired_factor on the arms' pairs (a point and a seed at both arms)."""
+    run: spreadlab.paired_factor on the arms' pairs (a point and a seed at both arms)."""
     import pandas as pd
 
-    from spreadmap.fidelity.paired_factor import config_block, correction
+    from spreadlab.paired_factor import config_block, correction
 
     table = pd.DataFrame(rows).rename(columns={"arm": "preset", "point": "name"})
     for column in ("seed", "f", "d_um", "h_um", "v_mm_s", "mfr", "pd", "mfr_sd", "pd_sd", "cpu_time"):

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The map per CPU-second (spreadmap.experiments.cost_study): active batches by variance reduction
+"""The map per CPU-second (spreadlab.experiments.cost_study): active batches by variance reduction
 against the same per predicted CPU-second and the LDS, on a known truth at equal CPU. No DEM.
 
 Writes to --out: cost_study_runs.csv (every run and checkpoint; cost_study_runs.partial.csv while it
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from spreadmap.experiments.cost_study import METHODS, cpu_needed, summarise
-from spreadmap.experiments.noisy_study import run
+from spreadlab.experiments.cost_study import METHODS, cpu_needed, summarise
+from spreadlab.experiments.noisy_study import run
 from spreadmap.files import write_text_atomically
 
 
@@ -43,7 +43,7 @@ def main(argv=None) -> int:
     write_text_atomically(out / "cost_study_needed.csv", needed.to_csv(index=False))
     summary = summarise(needed)
     write_text_atomically(out / "cost_study_summary.csv", summary.to_csv(index=False))
-    from spreadmap.experiments.experiment_plots import plot_cost_study
+    from spreadlab.experiments.experiment_plots import plot_cost_study
     plot_cost_study(table, args.targets, out / "cost_study")
     meta = {"command": "benchmarks/cost_study.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0, "seeds": args.seeds,

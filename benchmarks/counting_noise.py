@@ -30,8 +30,10 @@ from pathlib import Path
 import pandas as pd
 from scipy import stats
 
+from spreadlab.noise_law.counting import counting_constant, pooled_constant
 from spreadmap import config as spreadmap_config
-from spreadmap.noise_law.counting import counting_constant, pooled_constant
+from spreadmap.table import usable_cases
+from spreadmap.targets import names as target_names
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -59,8 +61,8 @@ def main(argv=None) -> int:
     print(f"cases: {args.cases} ({len(cases)} rows, {len(cells)} cells); presets of {args.run_config}")
     print(cells[show].to_string(index=False, float_format=lambda v: f"{v:.3f}"))
     print(f"configured c (metrics.counting_noise_c): {config['metrics']['counting_noise_c']}")
-    ok = cases[(cases["status"] == "ok") & ~cases["flagged"].fillna(False).astype(bool)]
-    for name in ("mfr", "pd"):
+    ok = usable_cases(cases)
+    for name in target_names("base"):
         est, lo, hi = pooled_constant(cells, name)
         print(f"{name}: pooled c = {est:.3f}, 90 % interval [{lo:.3f}, {hi:.3f}]; cells range "
               f"{cells[f'c_{name}'].min():.3f}-{cells[f'c_{name}'].max():.3f}")

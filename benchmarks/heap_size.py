@@ -12,7 +12,7 @@ on). Points:
   corner f 0.30, d 12 um, h 70 um, v 10 mm/s (h/d 5.8: the costliest corner of the main job, where the
          heap's h^2 is most of the spheres; run with --points corner, rough floor, two reserves)
 Each case runs in its own YADE process, two at a time, lowest seed first (a run cut short keeps
-balanced arms), every finished case appended to --csv at once (spreadmap.experiments.arms).
+balanced arms), every finished case appended to --csv at once (spreadlab.experiments.arms).
 
     .venv/bin/python benchmarks/heap_size.py --seeds 1 2 3 --csv docs/heap_size/cases.csv \
         --summary docs/heap_size/summary.md --keep /tmp/heap_size
@@ -27,11 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
+from spreadlab.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs, usable
 from spreadmap import config as spreadmap_config
 from spreadmap.case.scene import scene_parameters, standing_reserve_h2
-from spreadmap.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap.files import write_text_atomically
 from spreadmap.loop.cost import PlannedCost
+from spreadmap.targets import names as target_names
 
 ROOT = Path(__file__).resolve().parent.parent
 POINTS = {"thin": (0.30, 40.0, 60.0, 10.0), "wide": (0.30, 20.0, 70.0, 10.0), "corner": (0.30, 12.0, 70.0, 10.0),
@@ -94,7 +95,7 @@ def plan(base: dict) -> None:
 def trend_lines(rows: list[dict]) -> str:
     """Per point and floor: the least-squares slope of MFR and PD against log2 of the reserve (per
     doubling of the heap) over every usable case, with its SE from the residuals."""
-    good = [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
+    good = usable(rows)
     out = ["", "| point | floor | cases | MFR per doubling of the heap (SE) | PD per doubling (SE) |", "|---|---|---|---|---|"]
     for point in POINTS:
         for floor in ("rough", "flat"):
@@ -103,7 +104,7 @@ def trend_lines(rows: list[dict]) -> str:
                 continue
             x = np.log2([number(r["pile_reserve"]) for r in group])
             cells = []
-            for key in ("mfr", "pd"):
+            for key in target_names("base"):
                 y = np.array([number(r[key]) for r in group])
                 design = np.column_stack([np.ones_like(x), x])
                 coef, *_ = np.linalg.lstsq(design, y, rcond=None)
@@ -131,12 +132,12 @@ def figure(rows: list[dict], path: Path, d2_scene: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    good = [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
+    good = usable(rows)
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.8), constrained_layout=True)
     colours = {"thin": "tab:blue", "wide": "tab:orange", "corner": "tab:green", "mid": "tab:red", "mid_f45": "tab:purple",
                "low_f": "tab:brown", "mid_f16": "tab:pink",
                "corner_f31": "tab:olive"}
-    for ax, key in zip(axes, ("mfr", "pd")):
+    for ax, key in zip(axes, target_names("base")):
         for point, colour in colours.items():
             for floor, style in (("rough", "-o"), ("flat", "--s")):
                 xs, ms, ses = [], [], []

@@ -31,7 +31,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from spreadmap.dryrun import planned_jobs
+from spreadlab.dryrun import planned_jobs
 from spreadmap.host import description_lines
 
 ROOT = Path(__file__).resolve().parent.parent

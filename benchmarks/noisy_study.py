@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The sampling-design study with noise (spreadmap.experiments.noisy_study): per design and noise
+"""The sampling-design study with noise (spreadlab.experiments.noisy_study): per design and noise
 model, the cases needed before the map is right (its RMSE against a known truth at a target). No DEM.
 
 Writes to --out: noisy_study_runs.csv (every run and checkpoint; noisy_study_runs.partial.csv while
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from spreadmap.experiments.noisy_study import NOISE_MODELS, cases_needed, rmse_summary, run, summarise
+from spreadlab.experiments.noisy_study import NOISE_MODELS, cases_needed, rmse_summary, run, summarise
 from spreadmap.files import write_text_atomically
 
 
@@ -44,7 +44,7 @@ def main(argv=None) -> int:
     write_text_atomically(out / "noisy_study_summary.csv", summ.to_csv(index=False))
     rs = rmse_summary(table)
     write_text_atomically(out / "noisy_study_rmse.csv", rs.to_csv(index=False))
-    from spreadmap.experiments.experiment_plots import plot_noisy_study
+    from spreadlab.experiments.experiment_plots import plot_noisy_study
     plot_noisy_study(table, summ, rs, out / "noisy_study")
     meta = {"command": "benchmarks/noisy_study.py " + " ".join(argv if argv is not None else sys.argv[1:]),
             "wall_s": time.time() - t0, "cpu_s": time.process_time() - c0,

@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
+from spreadlab.experiments.arms import number, read_rows, run_arm_case
 from spreadmap import config as spreadmap_config
-from spreadmap.experiments.arms import number, read_rows, run_arm_case, write_rows
-from spreadmap.files import write_text_atomically
+from spreadmap.files import write_csv_atomically, write_text_atomically
 from spreadmap.metrics.case import overlap_sampling_factor
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -88,7 +88,7 @@ def main() -> None:
                         for arm in ARMS if (arm, point, seed) not in done]
                 for row in pool.map(run_one, jobs):  # the pair side by side, one per core
                     rows.append(row)
-                    write_rows(args.csv, rows, COLUMNS)
+                    write_csv_atomically(args.csv, rows, COLUMNS)
                     print(f"{row['arm']:10s} {point:5s} s{seed} mfr {number(row.get('mfr')):.6f} "
                           f"cpu {number(row['cpu_time']):.1f} s", flush=True)
     text = summary(rows)

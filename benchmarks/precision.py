@@ -45,8 +45,10 @@ from pathlib import Path
 
 import numpy as np
 
-from spreadmap.study.checksums import republish_if_listed, verified_bytes
+from spreadlab.study.checksums import republish_if_listed, verified_bytes
+from spreadmap.files import write_csv_atomically
 from spreadmap.targets import current_name
+from spreadmap.targets import names as target_names
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -426,7 +428,7 @@ def against_shipped(by_point: dict, arms: list[str]) -> list[str]:
                   "|---|---|---|---|---|---|---|---|"]
         chi = {"mfr": [], "pd": []}
         for p in points:
-            m, q = (paired_shift(by_point[p][a], by_point[p]["shipped"], t) for t in ("mfr", "pd"))
+            m, q = (paired_shift(by_point[p][a], by_point[p]["shipped"], t) for t in target_names("base"))
             for t, r in (("mfr", m), ("pd", q)):
                 if math.isfinite(r["z"]):  # t with n - 1 dof, as the normal z of the same tail probability
                     chi[t].append(float(stats.norm.isf(stats.t.sf(abs(r["z"]), r["n"] - 1))) ** 2)
@@ -444,7 +446,7 @@ def against_shipped(by_point: dict, arms: list[str]) -> list[str]:
         total_s = sum(np.mean([r["cpu_time"] for r in by_point[p]["shipped"]]) for p in points)
         lo, hi = np.percentile(boot, [2.5, 97.5])
         lines.append("")
-        for t in ("mfr", "pd"):
+        for t in target_names("base"):
             k = len(chi[t])
             if k:
                 lines.append(f"- **{a}, {t.upper()}**: chi-square over the {k} points = {sum(chi[t]):.1f} ({k} dof, "
@@ -490,7 +492,7 @@ def report(rows: list[dict], arms: list[str]) -> str:
     lines += [""] + [f"- **{a}**: {np.mean(ratios[a]):.2f}x today's spheres per CPU-second, mean over "
                      f"{len(ratios[a])} points (range {min(ratios[a]):.2f}-{max(ratios[a]):.2f})"
                      for a in arms if a != "today" and ratios[a]] + [""]
-    for target in ("mfr", "pd"):
+    for target in target_names("base"):
         lines += [f"## {target.upper()}", "",
                   "| point | arm | seeds | mean | seed SD | CV | recorded SD / seed SD | N passed | CPU s | info / CPU s |",
                   "|---|---|---|---|---|---|---|---|---|---|"]
@@ -533,7 +535,7 @@ def report(rows: list[dict], arms: list[str]) -> str:
             a, b = complete[p].get("precision", []), complete[p].get("precision_slow_settle", [])
             if len(a) < 2 or len(b) < 2:
                 continue
-            for target in ("mfr", "pd"):
+            for target in target_names("base"):
                 va, vb = np.array([r[target] for r in a]), np.array([r[target] for r in b])
                 se = math.sqrt(va.var(ddof=1) / len(va) + vb.var(ddof=1) / len(vb))
                 cpu_ratio = np.mean([r["cpu_time"] for r in a]) / np.mean([r["cpu_time"] for r in b])
@@ -615,12 +617,7 @@ def main(argv=None) -> int:
     text = report(rows, args.arms)
     print(text)
     if args.csv:
-        Path(args.csv).parent.mkdir(parents=True, exist_ok=True)
-        with open(args.csv, "w", newline="") as fh:
-            writer = csv.DictWriter(fh, fieldnames=CSV_COLUMNS, extrasaction="ignore")
-            writer.writeheader()
-            for r in rows:
-                writer.writerow({**r, "case_dir": Path(r["case_dir"]).name})
+        write_csv_atomically(args.csv, [{**r, "case_dir": Path(r["case_dir"]).name} for r in rows], CSV_COLUMNS)
         if republish_if_listed(args.csv):  # a published table: its folder's checksums follow it
             print(f"re-published the checksums of {args.csv}", flush=True)
     if args.summary:

@@ -10,7 +10,7 @@ Arms (each the shipped config, `default` preset, adhesion as shipped; one thing 
                sets a 0.77x shorter step than D5's at span 1, and there are more of them).
 Points: fine / medium / coarse (D50 15 / 30 / 45 um at f 0.3, h 60 um, v 10 mm/s: the points of
 benchmarks/adhesion_scaling.py), each with --seeds packing seeds; cases run two at a time, each
-in its own process (spreadmap.experiments.arms), cheapest first, every finished case appended to
+in its own process (spreadlab.experiments.arms), cheapest first, every finished case appended to
 --csv at once.
 
     .venv/bin/python benchmarks/psd_cost.py --csv docs/size_distribution/cost_cases.csv \
@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from spreadlab.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap import config as spreadmap_config
-from spreadmap.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
 from spreadmap.files import write_text_atomically
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -1,4 +1,4 @@
-"""The loop's replay (spreadmap.experiments.replay): the real step code against a truth fitted on the
+"""The loop's replay (spreadlab.experiments.replay): the real step code against a truth fitted on the
 published cases, with their noise law and the planned-cost law; prints and writes what the stop rule
 is worth, per design.
 
@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from spreadlab.experiments import replay
 from spreadmap.config import load
-from spreadmap.experiments import replay
 from spreadmap.files import atomic_path, write_text_atomically
 from spreadmap.loop.cost import fit_law
 from spreadmap.noise_law.apply import case_noise
@@ -194,7 +194,7 @@ def main(argv=None) -> int:
             frame.to_csv(tmp, index=False)
     with pd.option_context("display.width", 220, "display.max_columns", 20, "display.max_rows", 200):
         print(hon.round(3).to_string(index=False))
-    from spreadmap.experiments.replay_plots import plot_replay
+    from spreadlab.experiments.replay_plots import plot_replay
 
     plot_replay(paths, hon, a.out / "replay")
     write_text_atomically(a.out / "summary.md", summary_markdown(paths, hon, margin, law))

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
+from spreadlab.experiments.arms import add_arguments, arm_summary, number, read_rows, run_arm_case, run_jobs
 from spreadmap import config as spreadmap_config
-from spreadmap.experiments.arms import add_arguments, arm_summary, number, read_rows, run_arm_case, run_jobs
 from spreadmap.files import write_text_atomically
 
 ROOT = Path(__file__).resolve().parent.parent

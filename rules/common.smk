@@ -16,7 +16,7 @@ from spreadmap.sampling import chosen_points
 from spreadmap.case.render import template_sha256
 from spreadmap.case.migrate import legacy_case_folders
 from spreadmap.case.scene import UnsafeTimeStep
-from spreadmap.study.cases import loop_labels, planned_cases
+from spreadmap.sweeps import loop_labels, planned_cases
 from spreadmap.case.substrate import floor_label
 from spreadmap.case.powder import powder_label
 from spreadmap.surrogate.correction import Correction, uncorrected_label
@@ -171,7 +171,7 @@ def converge_final_step(wildcards):
 
 def converge_final_cases():
     """(case id, label in the converge table) of the whole converge run, in run order; the label
-    (spreadmap.study.cases.loop_labels) holds the batch each came in and whether it is an LDS case
+    (spreadmap.sweeps.loop_labels) holds the batch each came in and whether it is an LDS case
     (the start and each batch's LDS share) or an active one."""
     final = converge_final_step(None)
     n = int(final.rsplit("_", 1)[1].split(".")[0])

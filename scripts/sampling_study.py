@@ -1,7 +1,7 @@
 """Snakemake entry: the DEM-free sampling-design study (LDS vs lattice vs random)."""
+from spreadlab.experiments import sampling_study
+from spreadlab.experiments.experiment_plots import plot_sampling_study
 from spreadmap.design import Design
-from spreadmap.experiments import sampling_study
-from spreadmap.experiments.experiment_plots import plot_sampling_study
 from spreadmap.files import write_text_atomically
 from spreadmap.logs import log_to
 from spreadmap.surrogate import load_model

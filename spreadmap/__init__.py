@@ -8,27 +8,26 @@ Rooms (sub-packages), one job each:
 
 * ``case`` -- one DEM case, from design point to files: its identity (content key, case id), its
   scene, the rendered YADE script, the launcher, the floor, its pictures and VTK files.
-* ``study`` -- the published study (docs/study): its planned and finished cases, its summary.md,
-  restoring its cases into a workflow directory, the published folders' checksums.
 * ``loop`` -- the main job's adaptive loop (``snakemake converge``, rules/converge.smk): its stop
   rule about the map, the map's model, where the next batch goes, what a case costs, one step.
 * ``study_rule`` -- the published study's convergence rule (rules/study_rule.smk), as it ran.
-* ``experiments`` -- experiments without DEM: the loop's replay and the sampling studies.
 * ``fidelity`` -- the fidelity study: the cases it plans, its numbers, its figures.
 * ``surrogate`` -- the noise-aware surrogate, its validation, the saved model and prediction.
 * ``maps`` -- the design maps drawn from the surrogate; ``decisions`` -- from the maps to the
   settings to run a powder at; ``sensitivity`` -- the parameters ranked by influence.
 * ``metrics`` -- one case's raw YADE output reduced to its row of the results table (with the exact
   sphere/box volumes, ``metrics.geometry``).
-* ``noise_law`` -- the noise law fitted to seed repeats and applied to a results table; the
-  counting law's constant c from seed repeats (``noise_law.counting``).
+* ``noise_law`` -- the fitted noise law applied to a results table.
+
+The lab (experiments, the published study, the noise law's fitting, comparisons, the README's
+numbers) is the package beside this one, ``spreadlab``: it imports this package, never the reverse.
 
 Where each concept is held (one module each):
 
 * case identity, content keys: ``case.identity`` (case_scene, case_id, content_key); a case's
   scene: ``case.scene``; its script: ``case.render``; its run: ``case.launcher``; a failed one
   retried: ``case.retry``; its floor: ``case.substrate``
-* the published study: ``study`` (``cases``, ``summary``, ``restore``, ``checksums``)
+* the cases the sweeps plan (the workflow's registry): ``sweeps`` (planned_cases, loop_labels)
 * design space: ``design.Design``, built once from the config (``Design.from_config``): names,
   ranges, to / from the unit cube, axes; h/d (``design.h_over_d``); every ``ranges`` argument takes it
 * targets (name, labels, unit, SD and count columns, kind): ``targets`` (``REGISTRY``; read by
@@ -42,14 +41,22 @@ Where each concept is held (one module each):
   without taking a damaged one for data: ``records``
 * config defaults: ``schema`` (schemas/config.schema.yaml, the one place a default is stated;
   ``schema.checked``: one section, or an object inside one, checked alone, defaults filled); loading a whole config:
-  ``config`` (load: the schema's defaults filled, then the cross-key checks)
-* noise model: ``noise_law`` (config ``noise_model``: ``fit``, ``apply``); a case's own estimate:
+  ``config`` (load: the schema's defaults filled, then the cross-key checks; the sections the later
+  stages own are checked by their owners, wired in below)
+* noise model: ``noise_law.apply`` (config ``noise_model``; fitted by spreadlab.noise_law); a case's own estimate:
   ``metrics.noise``; a new run's SD at a point: ``surrogate.noise_sd``
 * the loop: ``loop.stepper`` (one step; its criteria ``loop.map_criteria``)
 * the study rule: ``study_rule.rule``
-* the experiments: ``experiments`` (``replay``, ``sampling_study``, ``noisy_study``, ``cost_study``;
-  DEM arms: ``arms``, an arm against a base case by case: ``paired``)
-* fidelity: ``fidelity`` (``plan``, ``study``, ``paired_factor``, ``fidelity_plots``)
+* fidelity: ``fidelity`` (``plan``, ``study``, ``fidelity_plots``)
 * surrogate: ``surrogate`` (``fitting``, ``prediction``); maps: ``maps``; decisions:
   ``decisions``; metrics: ``metrics`` (``case.case_metrics``); sensitivity: ``sensitivity``
 """
+from .config import SECTION_CHECKS
+from .decisions.config_section import problems as _decisions_problems
+from .fidelity.plan import check as _fidelity_problems
+from .surrogate.settings import problems as _surrogate_problems
+
+# Each later stage checks its own config section; config, the ground floor, imports none of them
+# (issue 65): the package hands their checks to it once, here, so every spreadmap.config.validate
+# refuses every section's problem, in this order.
+SECTION_CHECKS[:] = [_surrogate_problems, _decisions_problems, _fidelity_problems]

@@ -10,9 +10,20 @@ from pathlib import Path
 import jsonschema
 
 # the schema, a section of it and a section checked alone live in spreadmap.schema (the ground
-# floor every module may read); this module validates a whole config, cross-keys included
+# floor every module may read); this module validates a whole config, cross-keys included (the
+# sections of later stages by the checks their owners hand in: SECTION_CHECKS)
 from .schema import SCHEMA, checked, read_yaml, section_schema  # noqa: F401  (re-exported)
+from .targets import REGISTRY
 from .targets import RENAMED as RENAMED_TARGETS
+from .targets import names as target_names
+
+# The checks of the sections the later stages own (surrogate, decisions, fidelity): each owner
+# states what is wrong with its section, `check(config) -> list of messages naming the key`, and
+# the package wires them in here when it loads (spreadmap/__init__.py), in that order; config
+# imports no module above it (issue 65) and ``validate`` still refuses every section's problem.
+SECTION_CHECKS: list = []
+# the targets whose noise SD a fitted noise law sets: those with a counting law (mfr, pd)
+NOISE_LAW_TARGETS = tuple(t.name for t in REGISTRY.values() if t.count_column)
 
 
 class ConfigError(ValueError):
@@ -91,7 +102,7 @@ def renamed_sections(config: dict) -> dict:
     with a FutureWarning naming the old and the new key.
 
     Called by ``validate`` (so every config the workflow reads) and by readers of published
-    configs that are not validated (``spreadmap.study.summary``).
+    configs that are not validated (``spreadlab.study.summary``).
 
     Parameters
     ----------
@@ -304,8 +315,6 @@ def _check_cross_keys(config: dict) -> None:
             raise ConfigError(f"config key 'noise_calibration[{i}]': h_over_d_from {region['h_over_d_from']} "
                               f"must be below h_over_d_below {region['h_over_d_below']} (the region is empty)")
     if config.get("noise_model"):
-        from .noise_law.apply import check_sections
-
         try:
             check_sections(config["noise_model"], config.get("noise_calibration"))
         except ValueError as error:
@@ -320,20 +329,6 @@ def _check_cross_keys(config: dict) -> None:
             if name not in named:
                 raise ConfigError(f"config key 'pictures.{key}': value {name!r} is not allowed; "
                                   f"it must name a chosen point of points.named: {sorted(named)}")
-    from .surrogate import make_config
-
-    try:
-        make_config(config["surrogate"])
-    except (ValueError, KeyError) as error:
-        raise ConfigError(f"config key 'surrogate': {error}") from None
-    from .decisions.config_section import problems as decision_problems
-
-    for problem in decision_problems(config):
-        raise ConfigError(problem)
-    from .fidelity.plan import check as check_fidelity
-
-    for problem in check_fidelity(config):
-        raise ConfigError(problem)
     clearance = config["metrics"]["pd_clearance_d"]  # filled from the schema by validate() above
     for name, preset in presets.items():
         if preset["window_d"] - clearance < config["scene"]["blade_thickness_d"]:
@@ -341,6 +336,38 @@ def _check_cross_keys(config: dict) -> None:
                               f"the PD box spans the window less the clearance behind the blade "
                               f"(metrics.pd_clearance_d = {clearance}) and must be at least the blade thickness "
                               f"(scene.blade_thickness_d = {config['scene']['blade_thickness_d']})")
+    for check in SECTION_CHECKS:
+        for problem in check(config):
+            raise ConfigError(problem)
+
+
+def check_sections(noise_model: dict | None, noise_calibration: list | None) -> None:
+    """Refuse a band of `noise_calibration` that would scale a target the fitted law sets (a region
+    without `targets` scales every target): the law supersedes the bands for MFR and PD.
+
+    Parameters
+    ----------
+    noise_model : dict or None
+        The config's `noise_model` section; None or empty: nothing to check.
+    noise_calibration : list or None
+        The config's `noise_calibration` regions.
+
+    Raises
+    ------
+    ValueError
+        If a region scales MFR or PD while `noise_model` sets that target's noise; the message
+        names the region's index.
+    """
+    if not noise_model:
+        return
+    covered = [t for t in NOISE_LAW_TARGETS if t in noise_model]
+    for i, region in enumerate(noise_calibration or []):
+        named = region.get("targets") or list(target_names())
+        clash = sorted(set(named) & set(covered))
+        if clash:
+            raise ValueError(f"noise_calibration[{i}] scales {clash}, whose noise SDs noise_model sets "
+                             f"(a region without `targets` scales every target): name the layer measures it "
+                             f"scales under `targets`, or remove it")
 
 
 def load(path: Path | str) -> dict:

@@ -5,7 +5,9 @@ old file or the new one. A full disk or a file-size limit met while writing leav
 too, and the error says so, naming the file."""
 from __future__ import annotations
 
+import csv
 import errno
+import io
 import os
 import uuid
 from contextlib import contextmanager
@@ -93,3 +95,27 @@ def write_text_atomically(path: Path | str, text: str, encoding: str = "utf-8") 
     with atomic_path(path) as tmp:
         with open(tmp, "w", encoding=encoding, newline="\n") as fh:
             fh.write(text)
+
+
+def write_csv_atomically(path: Path | str, rows, columns) -> None:
+    """Write rows as a CSV table atomically and durably (``write_text_atomically``).
+
+    Parameters
+    ----------
+    path : pathlib.Path or str
+        The file; its folder is created if missing.
+    rows : iterable of dict
+        One mapping per row, column name to value (written as ``csv.DictWriter`` writes it).
+    columns : iterable of str
+        The header, in order; a row's other keys are left out, a column a row lacks is empty.
+
+    Raises
+    ------
+    OSError
+        If the write fails (``atomic_path``); the file is left as it was.
+    """
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=list(columns), extrasaction="ignore")
+    writer.writeheader()
+    writer.writerows(rows)
+    write_text_atomically(path, buf.getvalue())

@@ -14,11 +14,11 @@ from pathlib import Path
 import psutil
 import pytest
 
+from spreadlab.dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 from spreadmap import config as spreadmap_config
 from spreadmap.case.identity import case_scene
 from spreadmap.case.launcher import run_case
 from spreadmap.case.render import render
-from spreadmap.dryrun import planned_jobs  # noqa: F401  (for the workflow tests)
 from spreadmap.files import write_text_atomically
 
 ROOT = Path(__file__).resolve().parent.parent

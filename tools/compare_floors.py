@@ -8,7 +8,7 @@ RUN_A and RUN_B are working copies in which the main job ran (`snakemake --cores
 (`scene.substrate.kind` in each one's config.yaml): each holds config.yaml and
 results/surrogate/model.joblib. Each floor's map model gives a mean and its model SD at a point; the
 ratio A / B and the difference A - B get their intervals from the two independent posteriors
-(spreadmap.maps.floors). Writes to --out:
+(spreadlab.floors). Writes to --out:
   ratio_box.{png,pdf,csv}   the ratio at --points scrambled-Sobol' points of the box against h/d
   side_by_side.{png,pdf,csv} MFR and PD on each floor and their ratio over the (d, h) plane at f, v
   by_band.csv              the ratio per h/d band (medians, ranges, interval widths)
@@ -24,11 +24,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from spreadlab.floors import box_sample, by_band, compare
+from spreadlab.floors_plot import plot_ratio_box, plot_side_by_side
 from spreadmap.case.substrate import FLAT, ROUGH, floor_label, floor_of, mean_hollow_depth
 from spreadmap.config import load
 from spreadmap.design import TARGETS
-from spreadmap.maps.floors import box_sample, by_band, compare
-from spreadmap.maps.floors_plot import plot_ratio_box, plot_side_by_side
 from spreadmap.maps.grids import grid_frame, values
 from spreadmap.surrogate import load_model
 

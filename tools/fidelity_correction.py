@@ -7,7 +7,7 @@
 TABLE is a fidelity study's results table (`snakemake fidelity` writes results/tables/fidelity.csv):
 the same points and packing seeds at both presets. Writes to --out: correction.json (per target the
 factor, its SD at a point not run, the random-effects evidence, the points), pairs.csv, and the figure
-correction.{png,pdf,csv}; prints the `fidelity_correction` config block (spreadmap.fidelity.paired_factor).
+correction.{png,pdf,csv}; prints the `fidelity_correction` config block (spreadlab.paired_factor).
 """
 from __future__ import annotations
 
@@ -19,10 +19,10 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
+from spreadlab.paired_factor import config_block, correction, pairs
 from spreadmap.case.substrate import floor_label, floor_of
 from spreadmap.config import load
 from spreadmap.fidelity.fidelity_plots import correction_figure
-from spreadmap.fidelity.paired_factor import config_block, correction, pairs
 
 ROOT = Path(__file__).resolve().parent.parent
 

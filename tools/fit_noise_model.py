@@ -3,10 +3,10 @@
 
     .venv/bin/python tools/fit_noise_model.py [--docs docs] [--out docs/noise] [--boots 2000]
 
-Reads the seed repeats of the shipped scene under docs/ (spreadmap.noise_law.cells), fits per
+Reads the seed repeats of the shipped scene under docs/ (spreadlab.noise_law.cells), fits per
 target ln SD = ln value + a + b ln(N/150) + g ln((h/d)/2) by the chi-square likelihood of the cells'
-sample variances (spreadmap.noise_law.fit), tests b = -1/2 and other terms, checks the law leave-
-one-point-out (spreadmap.noise_law.leave_one_out) beside the stated SDs and the hand bands, checks the
+sample variances (spreadlab.noise_law.fit), tests b = -1/2 and other terms, checks the law leave-
+one-point-out (spreadlab.noise_law.leave_one_out) beside the stated SDs and the hand bands, checks the
 other scenes' arms, and writes to --out: README.md, law.json (the coefficients, their intervals, the
 config block), cells.csv, heldout.csv, terms.csv, by_h_over_d.csv, pooled_by_band.csv, other_arms.csv and the figure
 noise_law.{png,pdf,csv}. Prints the `noise_model` config block.
@@ -14,10 +14,10 @@ noise_law.{png,pdf,csv}. Prints the `noise_model` config block.
     .venv/bin/python tools/fit_noise_model.py --scene adhesive [--replay-run docs/main_job/run_2026-12-06]
 
 The adhesive default (the config's surface energy and pile reserve): its few seed repeats
-(spreadmap.noise_law.cells.adhesive_cases) refitted against the dry law of docs/noise/law.json
-(spreadmap.noise_law.refit: the level alone, and the level with the power of h/d), checked
+(spreadlab.noise_law.cells.adhesive_cases) refitted against the dry law of docs/noise/law.json
+(spreadlab.noise_law.refit: the level alone, and the level with the power of h/d), checked
 leave-one-point-out, other pile reserves of docs/heap_size fitted apart (--check-reserve), and with
---replay-run a published run's stop criteria decided again with each law (spreadmap.loop.recheck).
+--replay-run a published run's stop criteria decided again with each law (spreadlab.recheck).
 Writes to docs/noise/adhesive: README.md, law.json, cells.csv, heldout.csv, replay_<run>.csv.
 """
 from __future__ import annotations
@@ -32,15 +32,15 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from spreadlab.noise_law.cells import ADHESIVE_VARIANT, COUNT, OTHER_ARMS, adhesive_cases, adhesive_cells, published_cells
+from spreadlab.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval
+from spreadlab.noise_law.leave_one_out import leave_point_out, predictive_check, scored
+from spreadlab.noise_law.plot import law_figure
+from spreadlab.noise_law.refit import FREE, config_entry, refit, refit_target
 from spreadmap import config as spreadmap_config
 from spreadmap.case.powder import bond_number
 from spreadmap.case.substrate import floor_label
 from spreadmap.metrics.noise import calibration_factors
-from spreadmap.noise_law.cells import ADHESIVE_VARIANT, COUNT, OTHER_ARMS, adhesive_cases, adhesive_cells, published_cells
-from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval
-from spreadmap.noise_law.leave_one_out import leave_point_out, predictive_check, scored
-from spreadmap.noise_law.plot import law_figure
-from spreadmap.noise_law.refit import FREE, config_entry, refit, refit_target
 from spreadmap.table import usable
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -212,7 +212,7 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "",
         "**Likelihood.** For normal seeds nu s^2 / sigma^2 ~ chi2_nu (nu = k - 1): each cell's s^2 has the "
         "chi-square (Gamma) density of that law, and the fit maximises their product (Newton's method on the "
-        "analytic score and information; `spreadmap/noise_law/fit.py`). Least squares on ln s would be biased "
+        "analytic score and information; `spreadlab/noise_law/fit.py`). Least squares on ln s would be biased "
         "(E ln s^2 is 0.3-1 below ln sigma^2 at 2-3 dof) and would weigh a 2-dof cell like a 3-dof one.",
         "",
         "**Intervals.** Of the coefficients: profile likelihood (where twice the drop of the profile log-likelihood "
@@ -309,7 +309,7 @@ def readme(results: dict, checks: pd.DataFrame, terms: pd.DataFrame, per_band: p
         "sqrt(k / (k - 1)), has one case's SD); the share inside, its interval the union of a bootstrap over design "
         "points and Clopper-Pearson over seeds, called too wide or too narrow only when it excludes 90 %. "
         "Shape: a Kolmogorov-Smirnov test of "
-        "the cells' PITs, F_chi2_nu(nu u), against uniform (`spreadmap/noise_law/leave_one_out.py`, `heldout.csv`).",
+        "the cells' PITs, F_chi2_nu(nu u), against uniform (`spreadlab/noise_law/leave_one_out.py`, `heldout.csv`).",
         "",
     ]
     for target in TARGETS:
@@ -496,8 +496,8 @@ def adhesive_cells_table(cells: pd.DataFrame, results: dict, dry_law: dict, role
 
 def run_replay(run_dir: Path, cfg: dict, laws: dict) -> pd.DataFrame:
     """A run's stop criteria at each of its steps: as published, and decided again (the loop's own
-    code, spreadmap.loop.recheck) with each law of `laws` (label -> noise_model)."""
-    from spreadmap.loop.recheck import path_rows, recheck_path, run_steps
+    code, spreadlab.recheck) with each law of `laws` (label -> noise_model)."""
+    from spreadlab.recheck import path_rows, recheck_path, run_steps
     from spreadmap.schema import checked
 
     steps = run_steps(run_dir)
@@ -650,7 +650,7 @@ def adhesive_readme(a, cfg, reserve, cells, results, dry_law, chosen, block, che
         "",
         "## The cells",
         "",
-        "The adhesive default's seed repeats (`spreadmap.noise_law.cells.adhesive_cases`): "
+        "The adhesive default's seed repeats (`spreadlab.noise_law.cells.adhesive_cases`): "
         f"**{n_cells} cells at {n_points} design points, {n_dof} degrees of freedom** per target (`cells.csv`, `role` = fit). "
         "A row is of the scene when its arm is "
         "the scene's (docs/adhesion `adh_x1000`, docs/size_distribution `one_size`) or, in docs/heap_size, its columns say "
@@ -681,9 +681,9 @@ def adhesive_readme(a, cfg, reserve, cells, results, dry_law, chosen, block, che
         "## The refit",
         "",
         "Per target, ln SD = ln value + a + b ln(N / 150) + g ln((h/d) / 2), fitted by the chi-square likelihood of the cells' "
-        "sample variances (`spreadmap/noise_law/fit.py`, as the dry law). "
+        "sample variances (`spreadlab/noise_law/fit.py`, as the dry law). "
         f"{n_points} points cannot pin down three coefficients: "
-        "`spreadmap/noise_law/refit.py` fits the level a alone with b and g held at the dry law's (`level`), and a with g, b "
+        "`spreadlab/noise_law/refit.py` fits the level a alone with b and g held at the dry law's (`level`), and a with g, b "
         "held (`level_g`; N spans only "
         f"{mfr['n'].min():.0f}-{mfr['n'].max():.0f} here, so b stays the dry law's). Profile-likelihood intervals. The level "
         "against the dry law's two ways: with the dry law held fixed (the profile of a), and from one fit of the dry and "
@@ -708,7 +708,7 @@ def adhesive_readme(a, cfg, reserve, cells, results, dry_law, chosen, block, che
     hd_lo, hd_hi = mfr["h_over_d"].min(), mfr["h_over_d"].max()
     L += ["", f"The cells span h/d {hd_lo:.2f}-{hd_hi:.2f}; beyond that the factor is extrapolated.", "",
           "## Checked on points it did not see", "",
-          f"Leave one design point out ({n_points} folds; `spreadmap/noise_law/leave_one_out.py`, as for the dry law): each "
+          f"Leave one design point out ({n_points} folds; `spreadlab/noise_law/leave_one_out.py`, as for the dry law): each "
           "refit predicts the left-out point's cells. R = observed over predicted variance (1 if right), with its chi-square "
           "and its bootstrap-over-points intervals; the verdict is read from their union (called only when both exclude 1); "
           "the share of seeds inside a case's 90 % interval; the KS p of the PITs. Beside them the dry law and the stated "
@@ -841,7 +841,7 @@ def replay_lines(replay: pd.DataFrame, run_dir: Path) -> list[str]:
     same = mine is not None and bool(np.allclose(published, mine, rtol=1e-9, atol=0))
     L = [f"## The adhesive main job's stop criteria, decided again ({run_dir.as_posix().split('docs/')[-1]})", "",
          "Each step of the run (its cases in run order, its LDS flags) decided again by the loop's own code "
-         "(`spreadmap.loop.recheck.recheck_path` calls `spreadmap.loop.stepper.step`, the map model refitted, the criteria "
+         "(`spreadlab.recheck.recheck_path` calls `spreadmap.loop.stepper.step`, the map model refitted, the criteria "
          "recomputed) with each law as `noise_model`; the stop criterion is the map error over its tolerance "
          "(`converge.map_error`, margin x the larger of the CV error net of noise and the posterior SD; it holds at <= 1). "
          f"`replay_{run_dir.name}.csv` holds every number. The dry law (as run) "
@@ -887,7 +887,7 @@ def main(argv=None) -> None:
                     help="adhesive: the law of the config block (auto: level_g where the cells reject the dry g)")
     ap.add_argument("--replay-run", type=Path, default=None,
                     help="adhesive: a published main-job run (step_*.json, cases.csv) whose stop criteria are "
-                         "decided again with the dry and the refitted laws (spreadmap.loop.recheck; minutes)")
+                         "decided again with the dry and the refitted laws (spreadlab.recheck; minutes)")
     ap.add_argument("--reuse-replay", action="store_true",
                     help="adhesive: read the replay's CSV already in --out instead of deciding the steps again")
     a = ap.parse_args(argv)

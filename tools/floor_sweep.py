@@ -6,7 +6,7 @@ ahead of the blade, and the flags, split into piles that ran down and flows unst
 
 CASES_CSV is a cases table (results/tables/cases.csv of a run, or a published one such as
 docs/floors/flat_main_job/cases.csv); the run-down bound is the config's stability.min_heap_h2.
-Prints the table as Markdown and writes it as CSV (spreadmap.maps.floors.piles_by_band).
+Prints the table as Markdown and writes it as CSV (spreadlab.floors.piles_by_band).
 """
 from __future__ import annotations
 
@@ -16,9 +16,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from spreadlab.floors import piles_by_band
 from spreadmap.config import load
 from spreadmap.files import atomic_path
-from spreadmap.maps.floors import piles_by_band
 
 ROOT = Path(__file__).resolve().parent.parent
 

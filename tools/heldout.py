@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The held-out check of a study (spreadmap.surrogate.heldout_points), in two steps with the runs between:
+"""The held-out check of a study (spreadlab.heldout_points), in two steps with the runs between:
 
     # 1. before any run: choose the points away from every case run, predict them, write both
     python tools/heldout.py choose --model results/surrogate/model.joblib \\
@@ -22,12 +22,13 @@ from pathlib import Path
 
 import pandas as pd
 
+from spreadlab import heldout_points
 from spreadmap import config as spreadmap_config
 from spreadmap.records import current_columns
-from spreadmap.surrogate import heldout_points
 from spreadmap.surrogate.cli import predict_logged, write_csv
 from spreadmap.surrogate.saved_model import ModelFileError, load_model
 from spreadmap.targets import current_name
+from spreadmap.targets import names as target_names
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -102,7 +103,7 @@ def main(argv=None) -> int:
     s.add_argument("--points", required=True)
     s.add_argument("--predictions", required=True)
     s.add_argument("--table", required=True, help="results table holding the held-out runs")
-    s.add_argument("--targets", nargs="+", default=["mfr", "pd"])
+    s.add_argument("--targets", nargs="+", default=list(target_names("base")))
     s.add_argument("--level", type=float, default=0.95)
     s.add_argument("--out", help="per point and target (CSV); the summary beside it (.json)")
     f = sub.add_parser("plot", help="draw scored checks: seed means against the predictions, with their intervals")

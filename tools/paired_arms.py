@@ -7,7 +7,7 @@ numbers of a scene change's A/B (docs/steady_window, docs/heap_size).
 
 Reads a cases table with the columns benchmarks/precision.py writes (arm, point, seed, status,
 flagged, mfr, pd, mfr_sd, pd_sd, cpu_time, heap_end_h2). A pair is a point and seed both arms ran
-to the end ("ok"). Per arm (the numbers: spreadmap.experiments.paired):
+to the end ("ok"). Per arm (the numbers: spreadlab.experiments.paired):
 
 - **CPU**: the geometric mean of the pairs' CPU ratios arm / base, with a 95 % t interval on the
   log ratios (the pairs independent);
@@ -25,8 +25,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from spreadlab.experiments.paired import by_point, cpu_ratio, flagged, pairs, relative_shift
 from spreadmap.design import TARGETS  # mfr, pd (spreadmap.targets)
-from spreadmap.experiments.paired import by_point, cpu_ratio, flagged, pairs, relative_shift
 from spreadmap.files import write_text_atomically
 
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Re-make (or check) the SHA256SUMS manifests of the published folders (spreadmap/study/checksums.py).
+"""Re-make (or check) the SHA256SUMS manifests of the published folders (spreadlab/study/checksums.py).
 
     .venv/bin/python tools/publish_checksums.py [FOLDER ...]          # re-make: after publishing
     .venv/bin/python tools/publish_checksums.py --check [FOLDER ...]  # check: exit 1 on a mismatch
@@ -16,7 +16,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from spreadmap.study.checksums import MANIFEST, PUBLISHED, check_folder, listed_files, write_manifest
+from spreadlab.study.checksums import MANIFEST, PUBLISHED, check_folder, listed_files, write_manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -10,8 +10,8 @@ finished cases), the config it ran with, and copies the analyses that exist (the
 sweeps' convergence, the converge run's steps so far (and, while it runs, the table of its cases
 so far), its table and stopping path, the surrogate, the maps, the
 held-out points' table); what does not exist yet is listed. Then summary.md (and the trends'
-tables trend_*.csv) from what is there (spreadmap.study.summary). Last, the folder's SHA256SUMS
-(spreadmap.study.checksums: what tools/restore_study.py verifies before it restores). A later session
+tables trend_*.csv) from what is there (spreadlab.study.summary). Last, the folder's SHA256SUMS
+(spreadlab.study.checksums: what tools/restore_study.py verifies before it restores). A later session
 grows the same workflow directory (Snakemake re-uses every finished case) and publishes again.
 """
 from __future__ import annotations
@@ -22,13 +22,13 @@ import shutil
 import sys
 from pathlib import Path
 
+from spreadlab.study.cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress
+from spreadlab.study.checksums import write_manifest
+from spreadlab.study.summary import summary_markdown, trends
 from spreadmap import config as cfgmod
 from spreadmap.case.identity import readable_part
 from spreadmap.case.render import template_sha256
 from spreadmap.files import write_text_atomically
-from spreadmap.study.cases import cpu_hours_to_go, finished_table, loop_cases, planned_sweeps, progress
-from spreadmap.study.checksums import write_manifest
-from spreadmap.study.summary import summary_markdown, trends
 from spreadmap.table import write_table
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -3,7 +3,7 @@ beside what README says; exits 1 when one does not round to README's or is no lo
 
     .venv/bin/python tools/readme_numbers.py [--readme README.md] [--docs docs]
 
-The claims, their sources and the tolerance (README's rounding): spreadmap/readme_numbers.py.
+The claims, their sources and the tolerance (README's rounding): spreadlab/readme_numbers.py.
 """
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from spreadmap.readme_numbers import check, report_text
+from spreadlab.readme_numbers import check, report_text
 
 ROOT = Path(__file__).resolve().parent.parent
 

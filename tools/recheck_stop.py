@@ -22,8 +22,8 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
+from spreadlab.recheck import redecide
 from spreadmap import config as spreadmap_config
-from spreadmap.loop.recheck import redecide
 from spreadmap.loop.stepper import step_number
 from spreadmap.noise_law.apply import case_noise, check_sections
 

@@ -7,7 +7,7 @@ Snakemake re-uses them instead of re-running them.
 
 Restores every case of the published cases tables (cases_*.csv, the seed repeats *_seeds.csv): its
 metrics.json and benchmark.tsv from the published row, and restored.json saying so
-(spreadmap/study/restore.py); a case folder with a raw YADE record is left alone. Then the loop's step
+(spreadlab/study/restore.py); a case folder with a raw YADE record is left alone. Then the loop's step
 records (converge/steps/step_N.json), newer than the cases in the order they were made, and the
 held-out check's files (heldout/: its points and the predictions made before its runs). The raw
 records are not published: a restored case has no picture, VTK export or re-read of its overlap.
@@ -18,7 +18,7 @@ template it was run with: the workflow re-uses it only under a config and templa
 same key. Tables published before content keys (issue 35) do not record that scene: they are
 refused, naming the table (exit status 2), and nothing is restored.
 
-Every file it reads is first checked against the folder's SHA256SUMS (spreadmap/study/checksums.py);
+Every file it reads is first checked against the folder's SHA256SUMS (spreadlab/study/checksums.py);
 one that changed since it was published stops the restore before anything is written, with a
 message naming the file and how to get it back or re-publish it (exit status 2).
 """
@@ -28,9 +28,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from spreadlab.study.checksums import PublishedFileError, verified_bytes
+from spreadlab.study.restore import UnkeyedTableError, restore_cases, restore_steps, restore_time
 from spreadmap.files import atomic_path
-from spreadmap.study.checksums import PublishedFileError, verified_bytes
-from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps, restore_time
 
 
 def write_bytes_atomically(path: Path, data: bytes) -> None:

@@ -2,7 +2,7 @@
 """Where does the flow settle? From a run's raw records (results/cases/*/raw.json), the flow along the
 blade's travel beyond the pile over each case's window mean, per h/d band, and the window opened later:
 MFR and the flow-trend z of windows that open 3, 4, 5, 6 d beyond the pile and end where the case's
-window ended (spreadmap.metrics.window_start; docs/steady_window).
+window ended (spreadlab.window_start; docs/steady_window).
 
     .venv/bin/python tools/window_start.py RESULTS_DIR [--table CASES_CSV] [--out DIR]
 
@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from spreadmap.metrics import window_start as ws
+from spreadlab import window_start as ws
 
 EDGES_D = np.arange(0.0, 11.01, 1.0)
 OPENINGS_D = (3.0, 4.0, 5.0, 6.0)

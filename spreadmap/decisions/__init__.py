@@ -10,7 +10,7 @@ import importlib
 
 from .config_section import DecisionError, decision_config
 
-# The feasibility names are loaded when first used: the config's checks (spreadmap.config) import
+# The feasibility names are loaded when first used: the config's checks (wired in by spreadmap/__init__) import
 # config_section on every Snakemake start, and feasibility imports the maps, matplotlib and
 # scipy.stats (0.8 s a process).
 # (``spreadmap.decisions.feasibility`` is the module; its function of that name is

@@ -137,15 +137,15 @@ def knobs_figure(knobs: pd.DataFrame, base_preset: str, path_stem) -> dict:
 
 
 def correction_figure(result: dict, pairs: pd.DataFrame, path_stem, floor: str | None = None) -> dict:
-    """Per target (spreadmap.fidelity.paired_factor): each pair's and each point's reference / preset
+    """Per target (spreadlab.paired_factor): each pair's and each point's reference / preset
     against h/d, the factor the maps take and its 95 % interval at a point not run.
 
     Parameters
     ----------
     result : dict
-        The result of ``spreadmap.fidelity.paired_factor.correction``.
+        The result of ``spreadlab.paired_factor.correction``.
     pairs : pandas.DataFrame
-        The pairs it was computed from (``spreadmap.fidelity.paired_factor.pairs``; also the CSV
+        The pairs it was computed from (``spreadlab.paired_factor.pairs``; also the CSV
         saved).
     path_stem : pathlib.Path or str
         Where to save: ``<path_stem>.png``, ``.pdf`` and ``.csv``.

@@ -294,7 +294,7 @@ def case_metrics(raw: dict, regime_rules: dict, stability: dict, settings: dict)
         out.update({k: measured[k] for k in ("mfr", "pd", "pd_cv")})
         new.update({k: measured[k] for k in own if k in measured})
         out["regime"] = classify(out["mfr"], new["coverage"], new["thickness_ratio"], regime_rules)
-        for name in ("mfr", "pd"):
+        for name in targets.names("base"):
             if not 0.0 <= out[name] <= DENSEST_PACKING:
                 flags.append(f"{name} = {out[name]:.4f} outside [0, {DENSEST_PACKING:.4f}]")
     else:

@@ -15,7 +15,7 @@ Steady flow (issue: the steady-window flag): the change of the flow between the 
 SEs of that within-window noise (``flow_trend_batch_z``), a standard-normal score whatever the
 number of batches, so that one bound reads the same tail probability everywhere.
 
-c is checked against a table of seeds by ``spreadmap.noise_law.counting``.
+c is checked against a table of seeds by ``spreadlab.noise_law.counting``.
 """
 from __future__ import annotations
 

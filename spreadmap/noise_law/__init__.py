@@ -1,4 +1,3 @@
-"""The noise law of a case fitted to seed repeats (issue 32): `cells` gathers seed-repeat cells,
-`fit` fits ln SD on ln N and ln(h/d) by the chi-square likelihood of the cells' variances, `leave_one_out`
-checks it on points it did not see, `apply` puts it into a results table's noise SD columns;
-`counting` reads the counting law's constant c from seed repeats."""
+"""The noise law of a case as the product applies it (issue 32): `apply` puts a fitted law (config
+`noise_model`) into a results table's noise SD columns. Fitting it to seed repeats is the lab's
+(spreadlab.noise_law: `cells`, `fit`, `leave_one_out`, `refit`, `plot`, `counting`)."""

@@ -21,45 +21,18 @@ import numpy as np
 import pandas as pd
 
 from .. import targets as registry
+from ..config import NOISE_LAW_TARGETS, check_sections
 from ..design import h_over_d
 from ..metrics.noise import calibrated_noise
 from ..schema import checked, section_schema
-from .cells import COUNT
 
-MODEL_TARGETS = tuple(COUNT)  # mfr, pd
+# the count behind each target's counting law (spreadmap.metrics.case)
+COUNT = {name: registry.REGISTRY[name].count_column for name in NOISE_LAW_TARGETS}  # mfr, pd
+MODEL_TARGETS = NOISE_LAW_TARGETS  # mfr, pd
 # the schema's defaults, for callers without a config: metrics.counting_noise_c, and the law's
 # reference count and h/d (noise_model.n_ref, h_over_d_ref) for a law handed without them
 COUNTING_NOISE_C = checked("metrics")["counting_noise_c"]
 LAW_REFS = {key: section_schema("noise_model")["properties"][key]["default"] for key in ("n_ref", "h_over_d_ref")}
-
-
-def check_sections(noise_model: dict | None, noise_calibration: list | None) -> None:
-    """Refuse a band of `noise_calibration` that would scale a target the fitted law sets (a region
-    without `targets` scales every target): the law supersedes the bands for MFR and PD.
-
-    Parameters
-    ----------
-    noise_model : dict or None
-        The config's `noise_model` section; None or empty: nothing to check.
-    noise_calibration : list or None
-        The config's `noise_calibration` regions.
-
-    Raises
-    ------
-    ValueError
-        If a region scales MFR or PD while `noise_model` sets that target's noise; the message
-        names the region's index.
-    """
-    if not noise_model:
-        return
-    covered = [t for t in MODEL_TARGETS if t in noise_model]
-    for i, region in enumerate(noise_calibration or []):
-        named = region.get("targets") or list(registry.names())
-        clash = sorted(set(named) & set(covered))
-        if clash:
-            raise ValueError(f"noise_calibration[{i}] scales {clash}, whose noise SDs noise_model sets "
-                             f"(a region without `targets` scales every target): name the layer measures it "
-                             f"scales under `targets`, or remove it")
 
 
 def law_rel_sd(n: np.ndarray, h_over_d: np.ndarray, law: dict, n_ref: float, hd_ref: float) -> np.ndarray:

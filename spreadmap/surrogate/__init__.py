@@ -6,9 +6,10 @@ partitions, per-case noise), ``features`` (model inputs), ``noise_sd`` (a new ru
 reference study's protocol), ``fitting`` (all of it on a table: the map model and its validation,
 apart or together), ``saved_model`` (file and loading), ``prediction`` (points in, mean and SDs
 out), ``cli`` (tools/predict.py, scripts/predict.py), ``plots``, ``correction`` (the
-preset-to-reference factor on the maps), ``heldout_points`` (tools/heldout.py).
+preset-to-reference factor on the maps).
 
-Importing this package imports no scikit-learn: config validation reads ``make_config`` from here.
+Importing this package imports no scikit-learn: the package wires ``settings.problems`` into the
+config's validation (spreadmap/__init__.py).
 The other names below are loaded on first use.
 """
 from __future__ import annotations

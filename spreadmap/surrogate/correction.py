@@ -1,9 +1,9 @@
 """The maps' step from the preset that ran to the finest one: a measured factor and its uncertainty.
 
 The main job runs the `default` preset; the fidelity study measures, at paired points and packing
-seeds, what `reference` reads against it (spreadmap.fidelity.paired_factor, docs/fidelity/correction).
+seeds, what `reference` reads against it (spreadlab.paired_factor, docs/fidelity/correction).
 Where config `fidelity_correction` gives a target a factor k with an SD s_k (its error at a point the
-fidelity study did not run: spreadmap.fidelity.paired_factor), the saved map
+fidelity study did not run: spreadlab.paired_factor), the saved map
 model reports that target as `reference` would read it:
 
     mean' = k mean,    model SD' = sqrt(k^2 model SD^2 + mean^2 s_k^2 + model SD^2 s_k^2),
@@ -157,7 +157,7 @@ class Correction:
         str
             The line.
         """
-        parts = [f"{t.upper() if t in ('mfr', 'pd') else t} x{k:.3f} (SD {s:.3f})" for t, (k, s) in self.factors.items()]
+        parts = [f"{t.upper() if t in TARGETS else t} x{k:.3f} (SD {s:.3f})" for t, (k, s) in self.factors.items()]
         rest = [t for t in targets if t not in self.factors]
         text = f"`{self.preset}` corrected to `{self.reference}`: " + ", ".join(parts)
         if rest:

@@ -12,7 +12,7 @@ Halton cases, MFR spread 0.086, noise SD 0.020): MFR 0.0204 / 0.0228 / 0.0232 an
 intervals, about +-0.004 at 32 cases); re-check on the main job's table.
 
 The main job's stop rests on this choice: on the adhesive main job's 64 cases (docs/main_job,
-run_2026-12-06b) the loop's own step (spreadmap.loop.recheck.redecide) reads the map error at 0.80
+run_2026-12-06b) the loop's own step (spreadlab.recheck.redecide) reads the map error at 0.80
 of its tolerance with ``physics`` (it stopped there) and 1.24 with ``raw``, which would not stop.
 """
 from __future__ import annotations

@@ -14,6 +14,16 @@ def make_config(config: Mapping | None = None) -> dict:
     return checked("surrogate", config)
 
 
+def problems(config: Mapping) -> list[str]:
+    """What is wrong with a whole config's ``surrogate:`` section (its defaults filled, unknown keys
+    refused: ``make_config``), as a message naming the key; spreadmap.config.validate asks it."""
+    try:
+        make_config(config["surrogate"])
+    except (ValueError, KeyError) as error:
+        return [f"config key 'surrogate': {error}"]
+    return []
+
+
 def map_config(config: Mapping | None = None) -> dict:
     """The maps' effective configuration (``sobol_n``: a power of 2, listed in the schema).
 

@@ -62,13 +62,32 @@ def _boot_interval(values: np.ndarray, stat, seed: int, level: float = 0.95) -> 
     return float(np.quantile(b, a)), float(np.quantile(b, 1 - a))
 
 
+def verdict(lo: float, hi: float, null: float, above: str, below: str) -> str:
+    """What an interval (lo, hi) says of a `null` value (the noise law's held-out check reads its
+    intervals so too: spreadlab.noise_law.leave_one_out).
+
+    Parameters
+    ----------
+    lo, hi : float
+        The interval's ends.
+    null : float
+        The value it is read against.
+    above, below : str
+        The words for an interval wholly above `null` and wholly below it.
+
+    Returns
+    -------
+    str
+        `above`, `below`, or "consistent" when the interval contains `null`.
+    """
+    return above if lo > null else below if hi < null else "consistent"
+
+
 def coverage_verdict(low: float, high: float, level: float) -> str:
     """What a coverage interval (low, high) says of intervals meant to hold `level`: "too wide"
     when its whole interval lies above the level (the intervals cover more than they claim),
     "too narrow" when it lies below, "consistent" when it contains the level, "unknown" when
     either end is missing."""
-    from ..noise_law.leave_one_out import verdict  # the noise law's held-out check reads its intervals so
-
     if not (np.isfinite(low) and np.isfinite(high)):
         return "unknown"
     return verdict(low, high, level, "too wide", "too narrow")

@@ -255,7 +255,7 @@ def test_cost_map_anchors_two_scenes_to_their_measured_cases(tmp_path):
     ("cost_study.py", ["--targets", "0.05"],
      ["cost_study_runs.csv", "cost_study_needed.csv", "cost_study_summary.csv", "cost_study.png"])])
 def test_sampling_studies_run_from_benchmarks(tmp_path, script, args, written):
-    """The noisy and cost sampling studies (spreadmap.experiments) at their smallest: one seed, the
+    """The noisy and cost sampling studies (spreadlab.experiments) at their smallest: one seed, the
     LDS start only; every table and the figure written, the command recorded."""
     r = run(script, "--out", tmp_path, "--seeds", 1, "--n-max", 32, "--n-candidates", 128, *args, timeout=120)
     assert r.returncode == 0, r.stderr[-3000:]

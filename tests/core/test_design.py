@@ -7,10 +7,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from spreadlab.floors import box_sample
 from spreadmap import design
 from spreadmap.design import Design, h_over_d
 from spreadmap.loop.map_criteria import map_grids
-from spreadmap.maps.floors import box_sample
 from spreadmap.maps.grids import values
 from spreadmap.sampling import halton
 from spreadmap.table import usable_cases

@@ -13,7 +13,7 @@ from conftest import ROOT
 from spreadmap.case.launcher import write_json_atomically
 from spreadmap.case.vtk_export import write_vtk
 from spreadmap.figures import new_figure, save_figure
-from spreadmap.files import atomic_path, write_text_atomically
+from spreadmap.files import atomic_path, write_csv_atomically, write_text_atomically
 from spreadmap.table import write_table
 
 
@@ -58,6 +58,14 @@ def test_text_is_flushed_before_the_rename_and_the_folder_after(disk_events, tmp
     disk_events.clear()
     write_text_atomically(target, "new content\n")
     assert target.read_text() == "new content\n"
+    check_durable(disk_events, target)
+
+
+def test_rows_are_written_as_a_csv_through_the_durable_helper(disk_events, tmp_path):
+    """The columns in the order given, a row's other keys left out and a missing one empty."""
+    target = tmp_path / "rows" / "arms.csv"
+    write_csv_atomically(target, [{"b": 1, "a": "x", "extra": 9}, {"a": "y"}], ["a", "b"])
+    assert target.read_bytes() == b"a,b\r\nx,1\r\ny,\r\n"
     check_durable(disk_events, target)
 
 
@@ -119,18 +127,18 @@ DIRECT_WRITES = {
     ("spreadmap/logs.py", "open(smk.log[0]"): "a job's log, streamed line by line while it runs",
     ("spreadmap/surrogate/cli.py", "Path(smk.log[0]).write_text"): "predict's log",
     ("spreadmap/case/launcher.py", 'open(log_path, "w")'): "the YADE run's log, streamed",
-    ("spreadmap/experiments/noisy_study.py", "to_csv(partial"): "progress of a long experiment, a scratch file",
+    ("spreadlab/experiments/noisy_study.py", "to_csv(partial"): "progress of a long experiment, a scratch file",
 }
 WRITE = re.compile(r"""\.(to_csv|write_text|write_bytes|savefig)\((?!tmp\b|index=)|json\.dump\(|open\([^)]*["'][wa]b?["']""")
 
 
 def test_outputs_are_written_only_through_the_atomic_helpers():
-    """No output of the package or of a Snakemake script is written in place (a run killed
+    """No output of the packages (the lab's too) or of a Snakemake script is written in place (a run killed
     half-way would leave a truncated CSV, JSON or figure that looks finished); writes inside an
     atomic_path (to its `tmp`) are the helper's own."""
     root = ROOT
     found = []
-    for path in sorted([*root.glob("spreadmap/**/*.py"), *root.glob("scripts/*.py")]):
+    for path in sorted([*root.glob("spreadmap/**/*.py"), *root.glob("spreadlab/**/*.py"), *root.glob("scripts/*.py")]):
         name = str(path.relative_to(root))
         for number, line in enumerate(path.read_text().splitlines(), 1):
             if WRITE.search(line) and "tmp" not in line and not any(

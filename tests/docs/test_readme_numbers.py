@@ -8,7 +8,7 @@ import sys
 import pytest
 from conftest import ROOT
 
-from spreadmap.readme_numbers import CLAIMS, Claim, check, tolerance
+from spreadlab.readme_numbers import CLAIMS, Claim, check, tolerance
 
 DOCS = ROOT / "docs"
 

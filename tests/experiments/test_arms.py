@@ -1,8 +1,9 @@
-"""The arms study's table (spreadmap.experiments.arms) on hand-made rows: means, SEs from the
+"""The arms study's table (spreadlab.experiments.arms) on hand-made rows: means, SEs from the
 seeds' spread, differences from the reference arm, and the rows it leaves out."""
 import math
 
-from spreadmap.experiments.arms import arm_summary, mean_se, read_rows, usable, write_rows
+from spreadlab.experiments.arms import arm_summary, mean_se, read_rows, usable
+from spreadmap.files import write_csv_atomically
 
 
 def row(arm, point, seed, mfr, cpu, status="ok", flagged="False"):
@@ -35,6 +36,6 @@ def test_summary_rows_differences_and_flagged_counts():
 
 def test_rows_round_trip_through_the_csv(tmp_path):
     path = tmp_path / "arms.csv"
-    write_rows(path, ROWS, ["arm", "point", "seed", "mfr", "cpu_time", "status", "flagged"])
+    write_csv_atomically(path, ROWS, ["arm", "point", "seed", "mfr", "cpu_time", "status", "flagged"])
     assert read_rows(path) == ROWS
     assert read_rows(tmp_path / "missing.csv") == []

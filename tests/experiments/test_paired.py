@@ -1,4 +1,4 @@
-"""spreadmap.experiments.paired and tools/paired_arms.py on a synthetic A/B table of known shifts: the
+"""spreadlab.experiments.paired and tools/paired_arms.py on a synthetic A/B table of known shifts: the
 CPU ratio's geometric mean and the pooled relative shift with their t intervals as scipy computes
 them, per-point z from the recorded SDs, unfinished cases unpaired, a flag new in the arm counted."""
 
@@ -10,7 +10,7 @@ import pytest
 from conftest import script_module
 from scipy import stats
 
-from spreadmap.experiments import paired
+from spreadlab.experiments import paired
 
 tool = script_module("tools/paired_arms.py")
 

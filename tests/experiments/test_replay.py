@@ -1,4 +1,4 @@
-"""Tests of spreadmap.experiments.replay's stop and honesty rules on constructed paths (the replay run
+"""Tests of spreadlab.experiments.replay's stop and honesty rules on constructed paths (the replay run
 against a known truth is in tests/loop/test_convergence.py, beside the loop it drives)."""
 import pandas as pd
 import pytest
@@ -10,7 +10,7 @@ def test_replay_stops_and_honesty_on_a_constructed_path():
     the beta quantiles)."""
     from scipy.stats import beta
 
-    from spreadmap.experiments import replay
+    from spreadlab.experiments import replay
 
     rows = []
     for seed in range(10):

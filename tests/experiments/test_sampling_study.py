@@ -1,12 +1,12 @@
-"""Tests of spreadmap.experiments.sampling_study (no DEM) and of its figure."""
+"""Tests of spreadlab.experiments.sampling_study (no DEM) and of its figure."""
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from spreadlab.experiments import experiment_plots as cp
+from spreadlab.experiments import sampling_study as ss
 from spreadmap.design import bounds
-from spreadmap.experiments import experiment_plots as cp
-from spreadmap.experiments import sampling_study as ss
 
 
 def test_designs():
@@ -117,7 +117,7 @@ def test_sampling_study_plot_writes_files(small_study, tmp_path):
 # ---------------------------------------------------------------------------------------------
 # the study with noise (map RMSE against the known truth)
 # ---------------------------------------------------------------------------------------------
-from spreadmap.experiments import noisy_study as ns  # noqa: E402
+from spreadlab.experiments import noisy_study as ns  # noqa: E402
 from spreadmap.sampling import halton_unit  # noqa: E402
 
 
@@ -189,7 +189,7 @@ def test_active_per_cpu_spends_less_cpu_per_case_and_records_it():
 
 
 def test_cpu_needed_and_paired_ratio():
-    from spreadmap.experiments.cost_study import cpu_needed, summarise
+    from spreadlab.experiments.cost_study import cpu_needed, summarise
 
     rows = []
     for method, cpus in (("active", [3600.0, 7200.0, 10800.0]), ("active_per_cpu", [3600.0, 5400.0, 7200.0])):

@@ -1,4 +1,4 @@
-"""The preset-to-reference factor (spreadmap.fidelity.paired_factor): hand-worked random-effects numbers,
+"""The preset-to-reference factor (spreadlab.paired_factor): hand-worked random-effects numbers,
 a synthetic study of known factor, spread and noise, and the pairing of a fidelity table. No YADE."""
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from spreadmap.fidelity.paired_factor import config_block, correction, new_point_interval, pairs, random_effects
+from spreadlab.paired_factor import config_block, correction, new_point_interval, pairs, random_effects
 
 
 def test_random_effects_by_hand():

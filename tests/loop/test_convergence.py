@@ -593,7 +593,7 @@ def test_replay_runs_the_loop_against_a_known_truth(config):
     """A replay on the smooth truth (noise 0.008): its rows follow the steps, the cases it ran are
     the truth plus noise of the stated SD, and its true error is the map's against the truth,
     recomputed here with a model fitted on the same cases."""
-    from spreadmap.experiments import replay
+    from spreadlab.experiments import replay
 
     cfg = copy.deepcopy(config)
     cfg["converge"].update({**FAST, "start": 16, "batch": 8, "map_error": {"tolerance": {"mfr": 0.01, "pd": 0.01},

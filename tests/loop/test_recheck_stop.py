@@ -1,7 +1,7 @@
 """tools/recheck_stop.py: the published loop's last step decided again under another noise
 calibration, with today's map model. Checked against the step the loop itself recorded, and the noise it is held against
 recomputed here from the cases table with numpy (h/d masks written out, not calibrated_noise).
-spreadmap.loop.recheck: every step of a published main-job run decided again with another noise law."""
+spreadlab.recheck: every step of a published main-job run decided again with another noise law."""
 import json
 
 import numpy as np
@@ -49,11 +49,11 @@ def test_a_file_without_a_calibration_is_refused(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_a_runs_steps_decided_again_with_its_own_noise_law_reproduce_its_path():
-    """spreadmap.loop.recheck on the adhesive main job (docs/main_job/run_2026-12-06): its first two
+    """spreadlab.recheck on the adhesive main job (docs/main_job/run_2026-12-06): its first two
     steps decided again with the law it ran with give its published map errors (2.57, 1.77) and its
     next batch, to the bit; with a law twice as noisy, the CV error net of noise falls."""
+    from spreadlab.recheck import path_rows, recheck_path, run_steps
     from spreadmap import config as spreadmap_config
-    from spreadmap.loop.recheck import path_rows, recheck_path, run_steps
 
     run = ROOT / "docs" / "main_job" / "run_2026-12-06"
     steps = run_steps(run)[:2]

@@ -1,4 +1,4 @@
-"""The two floors' comparison (spreadmap.maps.floors): the ratio's quantiles against independent
+"""The two floors' comparison (spreadlab.floors): the ratio's quantiles against independent
 numbers (scipy's normal quantiles where B is exact, Monte Carlo draws otherwise), and compare() on
 stand-in models of known means and SDs."""
 from __future__ import annotations
@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from spreadmap.maps.floors import box_sample, by_band, compare, piles_by_band, ratio_quantile
+from spreadlab.floors import box_sample, by_band, compare, piles_by_band, ratio_quantile
 
 
 def test_ratio_quantile_with_exact_denominator_is_the_normal_quantile_scaled():

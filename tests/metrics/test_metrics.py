@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from spreadlab.noise_law.counting import counting_constant, pooled_constant
 from spreadmap.metrics import (
     JAM_COLUMNS,
     NEW_COLUMNS,
@@ -21,7 +22,6 @@ from spreadmap.metrics import (
     measured_span,
     passed_volume,
 )
-from spreadmap.noise_law.counting import counting_constant, pooled_constant
 
 D = 1.0  # work in units of the diameter
 R = 0.5 * D

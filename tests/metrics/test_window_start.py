@@ -1,4 +1,4 @@
-"""spreadmap.metrics.window_start on raw records of known flow: a steady flow reads 1 in every bin and
+"""spreadlab.window_start on raw records of known flow: a steady flow reads 1 in every bin and
 the same MFR in every later window; a flow that settles reads below 1 before it settles and the later
 window reads the settled flow; a Poisson flow's trend z is standard normal."""
 import math
@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from spreadmap.metrics import window_start as ws
+from spreadlab import window_start as ws
 
 D, GAP, WIDTH, PILE = 20e-6, 50e-6, 200e-6, 400e-6
 

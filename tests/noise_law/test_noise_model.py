@@ -11,11 +11,12 @@ import pandas as pd
 import pytest
 from conftest import ROOT
 
+from spreadlab.noise_law.cells import published_cells, seed_cells
+from spreadlab.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval
+from spreadlab.noise_law.leave_one_out import leave_point_out, predictive_check, scored
+from spreadmap.config import check_sections
 from spreadmap.metrics.noise import calibrated_noise
-from spreadmap.noise_law.apply import case_noise, check_sections
-from spreadmap.noise_law.cells import published_cells, seed_cells
-from spreadmap.noise_law.fit import HD_REF, LAW, N_REF, fit_law, likelihood_ratio, profile_interval
-from spreadmap.noise_law.leave_one_out import leave_point_out, predictive_check, scored
+from spreadmap.noise_law.apply import case_noise
 
 TRUTH = {"a": math.log(0.03), "b_ln_n": -0.5, "g_ln_hd": -0.8}
 

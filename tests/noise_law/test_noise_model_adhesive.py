@@ -1,5 +1,5 @@
-"""The noise law refitted for the adhesive default (spreadmap.noise_law.cells.adhesive_cases,
-spreadmap.noise_law.refit, tools/fit_noise_model.py --scene adhesive): the cells are exactly the
+"""The noise law refitted for the adhesive default (spreadlab.noise_law.cells.adhesive_cases,
+spreadlab.noise_law.refit, tools/fit_noise_model.py --scene adhesive): the cells are exactly the
 shipped scene's cases, each once (the published tables, and a small heap-size table holding a row
 of every other scene), and the refit recovers a known level from synthetic seed repeats drawn with a
 known SD: the truth inside its 95 % profile interval, and over 200 synthetic studies covered at about
@@ -13,10 +13,10 @@ import pytest
 from conftest import ROOT
 from scipy import stats
 
+from spreadlab.noise_law.cells import adhesive_cases, adhesive_cells, seed_cells
+from spreadlab.noise_law.fit import HD_REF, N_REF, profile_interval
+from spreadlab.noise_law.refit import FREE, identified, refit, refit_target
 from spreadmap.case.powder import bond_number
-from spreadmap.noise_law.cells import adhesive_cases, adhesive_cells, seed_cells
-from spreadmap.noise_law.fit import HD_REF, N_REF, profile_interval
-from spreadmap.noise_law.refit import FREE, identified, refit, refit_target
 
 DOCS = ROOT / "docs"
 SCALING = pd.read_csv(DOCS / "adhesion" / "scaling_cases.csv")
@@ -176,7 +176,7 @@ def test_g_is_fitted_only_where_the_points_allow_leaving_one_out():
 def test_the_published_adhesive_law_recomputes_from_the_published_seed_repeats():
     """docs/noise/adhesive (tools/fit_noise_model.py --scene adhesive): its cells and its config block
     from the published tables and docs/noise's dry law, at the shipped config's scene."""
-    from spreadmap.noise_law.refit import config_entry
+    from spreadlab.noise_law.refit import config_entry
 
     published = json.loads((DOCS / "noise" / "adhesive" / "law.json").read_text())
     dry = json.loads((DOCS / "noise" / "law.json").read_text())["targets"]

@@ -1,4 +1,4 @@
-"""Resuming a published study on a new machine (spreadmap/study/restore.py, tools/restore_study.py): the
+"""Resuming a published study on a new machine (spreadlab/study/restore.py, tools/restore_study.py): the
 restored cases give back the published table exactly, a real result is never overwritten, and
 Snakemake plans no YADE run for a restored case of its own scene and every run for one of another
 scene; a table published before content keys (issue 35) is refused. The dry runs are cheap (no YADE).
@@ -18,11 +18,11 @@ import pytest
 import yaml
 from conftest import ROOT, keyed_table, make_workflow, planned_jobs, snakemake, study_config
 
+from spreadlab.study.checksums import write_manifest
+from spreadlab.study.restore import UnkeyedTableError, restore_cases, restore_steps, restore_time
 from spreadmap import config as spreadmap_config
 from spreadmap.case.identity import readable_part
 from spreadmap.records import current_columns
-from spreadmap.study.checksums import write_manifest
-from spreadmap.study.restore import UnkeyedTableError, restore_cases, restore_steps, restore_time
 from spreadmap.table import build_table
 
 STUDY = ROOT / "docs" / "study"
@@ -143,7 +143,7 @@ def test_snakemake_plans_no_run_for_a_restored_case(tmp_path):
 
 
 def test_restored_files_are_dated_after_the_workflow_code(tmp_path):
-    """An hour back, but never older than the Snakefile, rules/ or scripts/ (spreadmap.study.restore's
+    """An hour back, but never older than the Snakefile, rules/ or scripts/ (spreadlab.study.restore's
     restore_time): a fresh clone dates its code at the clone."""
     (tmp_path / "scripts").mkdir()
     (tmp_path / "scripts" / "x.py").write_text("")

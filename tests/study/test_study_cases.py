@@ -1,4 +1,4 @@
-"""The study's plan (spreadmap.study.cases) is the plan the workflow runs, and the published study
+"""The study's plan (spreadlab.study.cases) is the plan the workflow runs, and the published study
 (docs/study/) holds the cases of that plan with the tables they recompute to."""
 import copy
 import json
@@ -9,10 +9,11 @@ import pandas as pd
 import pytest
 from conftest import ROOT, make_workflow, snakemake
 
+from spreadlab.study.cases import cpu_hours_to_go, finished_table, planned_sweeps, progress
 from spreadmap import config as spreadmap_config
 from spreadmap.case.identity import case_id, readable_id, readable_part
 from spreadmap.design import NAMES
-from spreadmap.study.cases import cpu_hours_to_go, finished_table, planned_cases, planned_sweeps, progress
+from spreadmap.sweeps import planned_cases
 from spreadmap.table import usable
 
 DOCS = ROOT / "docs" / "study"
@@ -167,7 +168,7 @@ def test_the_loops_cases_so_far_follow_its_steps(config):
     """Start 4 LDS cases, batches of 2 (one LDS, one active): the loop's cases are the first four
     of the sequence, then each step's batch in order, labelled by batch and LDS share as the
     workflow's converge table labels them."""
-    from spreadmap.study.cases import loop_cases
+    from spreadlab.study.cases import loop_cases
 
     cfg = copy.deepcopy(config)
     cfg["sweeps"] = {"lds": {"seed": 42, "partitions": [4]}}
@@ -189,7 +190,7 @@ def test_published_loop_cases_are_its_steps_cases(published):
     """cases_converge.csv (the loop so far) holds the cases its published steps planned, in run order,
     with their batch and LDS-share labels: the cases of the last step, whose CPU it equals, then
     those of the batch that step chose which had finished when it was published."""
-    from spreadmap.study.cases import loop_cases
+    from spreadlab.study.cases import loop_cases
 
     cfg, _ = published
     steps = [json.loads(s.read_text()) for s in (DOCS / "converge" / "steps").glob("step_*.json")]
@@ -242,9 +243,9 @@ def test_published_partitions_recompute_from_the_cases_with_numpy_and_scipy(publ
 
 
 def test_published_summary_recomputes_from_the_published_files(published):
-    """summary.md and the trend tables are what spreadmap.study.summary makes of docs/study's
+    """summary.md and the trend tables are what spreadlab.study.summary makes of docs/study's
     committed cases, steps, surrogate and maps today."""
-    from spreadmap.study.summary import summary_markdown, trends
+    from spreadlab.study.summary import summary_markdown, trends
 
     cfg, _ = published
     effects = trends(DOCS, cfg.get("ranges"))

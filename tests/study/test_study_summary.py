@@ -1,13 +1,13 @@
-"""The study's summary (spreadmap.study.summary): partial dependence against functions of known
+"""The study's summary (spreadlab.study.summary): partial dependence against functions of known
 effect, and the answers it writes from a study folder's files (analysis code: synthetic inputs)."""
 import json
 
 import numpy as np
 import pandas as pd
 
+from spreadlab.study.summary import NOT_YET, main_effect, summary_markdown, trends
 from spreadmap.design import NAMES
 from spreadmap.sensitivity.draws import FunctionDraws
-from spreadmap.study.summary import NOT_YET, main_effect, summary_markdown, trends
 
 RANGES = {"f": {"min": 0.15, "max": 0.45}, "d_um": {"min": 10, "max": 50}, "h_um": {"min": 55, "max": 75},
           "v_mm_s": {"min": 5, "max": 15}}
@@ -139,7 +139,7 @@ def test_the_summary_names_the_floor_of_the_studys_config(tmp_path):
 
 
 def test_flag_causes_are_counted_by_their_cause_with_numbers_hidden():
-    from spreadmap.study.summary import _flag_causes
+    from spreadlab.study.summary import _flag_causes
 
     flagged = pd.DataFrame({"flag_reason": [
         "flow fell by 15% over the window (-4.6 SE): the pile ran down",
@@ -276,10 +276,10 @@ def test_the_workflows_convergence_summary_adds_to_the_rule_from_the_cases(tmp_p
 
 
 def test_a_second_heldout_check_is_reported_beside_the_first(tmp_path):
-    """heldout/ and heldout2/ each scored by spreadmap.surrogate.heldout_points.score on known truth: the
+    """heldout/ and heldout2/ each scored by spreadlab.heldout_points.score on known truth: the
     summary states both, the second under its own heading, with counts computed here with numpy;
     a second check chosen but not yet scored says so."""
-    from spreadmap.surrogate.heldout_points import score
+    from spreadlab.heldout_points import score
 
     rng = np.random.default_rng(11)
 

@@ -1,11 +1,11 @@
-"""The held-out check (spreadmap.surrogate.heldout_points) on synthetic studies whose truth, model error
+"""The held-out check (spreadlab.heldout_points) on synthetic studies whose truth, model error
 and run noise are known."""
 import numpy as np
 import pandas as pd
 import pytest
 
+from spreadlab.heldout_points import choose_points, score
 from spreadmap.design import NAMES, to_unit
-from spreadmap.surrogate.heldout_points import choose_points, score
 
 RANGES = {"f": {"min": 0.15, "max": 0.45}, "d_um": {"min": 10, "max": 50}, "h_um": {"min": 55, "max": 75},
           "v_mm_s": {"min": 5, "max": 15}}
@@ -144,7 +144,7 @@ def test_the_cli_chooses_predicts_and_scores_held_out_runs_of_a_known_truth(tmp_
     assert all(s["inside"] >= 9 for s in summary), summary
     assert "seed means inside their 95% intervals" in r.stdout
     # the study's summary states the check from these files, and names every point outside
-    from spreadmap.study.summary import summary_markdown, trends
+    from spreadlab.study.summary import summary_markdown, trends
 
     text = summary_markdown(tmp_path, trends(tmp_path))
     for t in ("mfr", "pd"):

@@ -19,8 +19,8 @@ import shutil
 import pytest
 from conftest import FAST_SWEEP, ROOT, deep_update, make_workflow, planned_jobs, snakemake, write_config
 
-from spreadmap.study.checksums import write_manifest
-from spreadmap.study.restore import restore_cases, restore_time
+from spreadlab.study.checksums import write_manifest
+from spreadlab.study.restore import restore_cases, restore_time
 
 pytestmark = pytest.mark.yade
 
@@ -191,7 +191,7 @@ def test_the_study_publishes_and_answers_from_a_finished_run(finished_run, tmp_p
     import pandas as pd
     from conftest import ROOT
 
-    from spreadmap.study.summary import NOT_YET
+    from spreadlab.study.summary import NOT_YET
 
     out = tmp_path / "study"
     run = subprocess.run([sys.executable, str(ROOT / "tools" / "publish_study.py"), str(finished_run), "--out", str(out)],

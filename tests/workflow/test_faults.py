@@ -28,11 +28,11 @@ import pandas as pd
 import pytest
 from conftest import ROOT, keyed_table, make_workflow, planned_jobs, snakemake, study_config
 
+from spreadlab.study.checksums import PublishedFileError, check_folder, republish_if_listed, verified_bytes, write_manifest
+from spreadlab.study.restore import case_record, restore_cases, restore_steps
 from spreadmap.case.launcher import finished_simulation
 from spreadmap.records import CorruptFileError, current_columns, read_metrics, read_raw, read_table
 from spreadmap.sampling import chosen_points
-from spreadmap.study.checksums import PublishedFileError, check_folder, republish_if_listed, verified_bytes, write_manifest
-from spreadmap.study.restore import case_record, restore_cases, restore_steps
 from spreadmap.table import build_table
 
 pytestmark = pytest.mark.faults

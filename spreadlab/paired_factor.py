@@ -30,9 +30,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from .. import targets as registry
-from ..design import NAMES, h_over_d
-from ..table import usable_cases as usable
+from spreadmap import targets as registry
+from spreadmap.design import NAMES, h_over_d
+from spreadmap.table import usable_cases as usable
 
 TARGETS = registry.names("base")  # mfr, pd
 

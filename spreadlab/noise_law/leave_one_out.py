@@ -30,7 +30,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from .fit import LAW, fit_law
+from spreadlab.noise_law.fit import LAW, fit_law
+from spreadmap.surrogate.validation import verdict  # an interval against a null, as the surrogate's check reads it
 
 
 def leave_point_out(cells: pd.DataFrame, terms=LAW, fixed: dict | None = None, group: str = "point") -> pd.DataFrame:
@@ -39,9 +40,9 @@ def leave_point_out(cells: pd.DataFrame, terms=LAW, fixed: dict | None = None, g
     Parameters
     ----------
     cells : pandas.DataFrame
-        Seed-repeat cells of one target (``spreadmap.noise_law.cells.seed_cells``).
+        Seed-repeat cells of one target (``spreadlab.noise_law.cells.seed_cells``).
     terms : sequence of str, optional
-        The law's terms (``spreadmap.noise_law.fit.fit_law``).
+        The law's terms (``spreadlab.noise_law.fit.fit_law``).
     fixed : dict or None, optional
         Terms held at given values.
     group : str, optional
@@ -88,10 +89,6 @@ def scored(cells: pd.DataFrame, sd_col: str = "sd_pred") -> pd.DataFrame:
     z = stats.norm.ppf(0.95)
     inside = [int(np.sum(np.abs(dev) <= z * sd)) for dev, sd in zip(cells["dev"], cells[sd_col])]
     return cells.assign(u=u, pit=stats.chi2.cdf(cells["dof"] * u, cells["dof"]), inside=inside)
-
-
-def verdict(lo: float, hi: float, null: float, above: str, below: str) -> str:
-    return above if lo > null else below if hi < null else "consistent"
 
 
 def predictive_check(cells: pd.DataFrame, group: str = "point", level: float = 0.95,

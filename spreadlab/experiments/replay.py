@@ -34,15 +34,15 @@ from typing import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from .. import targets as registry
-from ..case.scene import precision_target
-from ..design import NAMES, Design, h_over_d
-from ..loop import map_criteria
-from ..loop.cost import PlannedCost
-from ..loop.model import make_map_fit
-from ..loop.stepper import step
-from ..sampling import halton
-from ..table import usable_cases
+from spreadmap import targets as registry
+from spreadmap.case.scene import precision_target
+from spreadmap.design import NAMES, Design, h_over_d
+from spreadmap.loop import map_criteria
+from spreadmap.loop.cost import PlannedCost
+from spreadmap.loop.model import make_map_fit
+from spreadmap.loop.stepper import step
+from spreadmap.sampling import halton
+from spreadmap.table import usable_cases
 
 TARGETS = registry.names("base")  # mfr, pd
 

@@ -23,8 +23,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from . import design
-from .run_report import set_summary
+from spreadmap import design
+from spreadmap.run_report import set_summary
 
 NUMBER = r"([-+]?\d+(?:\.\d+)?)"
 
@@ -336,7 +336,7 @@ def _transient_fed(docs: Path) -> list[float]:
     geometric mean CPU ratio and its 95 % t interval, the pairs; the largest point's MFR shift (mean
     over its seeds) over `shipped`'s mean in %, its z against the cases' recorded SDs (eight points,
     as the phrase says)."""
-    from .experiments.paired import by_point, cpu_ratio, pairs
+    from spreadlab.experiments.paired import by_point, cpu_ratio, pairs
 
     t = _csv(docs / "steady_window" / "transient_fed" / "cases.csv")
     p = pairs(t[t["seed"].isin([1, 2])], "window5_fed_transient", "shipped")
@@ -370,14 +370,14 @@ def _batch8_adhesive(docs: Path) -> list[float]:
 
 def _lever_pairs(docs: Path, table: str, arm: str):
     """Session 32's A/Bs against `shipped` (docs/steady_window/window5_pile3): the pairs of one arm."""
-    from .experiments.paired import pairs
+    from spreadlab.experiments.paired import pairs
 
     return pairs(_csv(docs / "steady_window" / "window5_pile3" / table), arm, "shipped")
 
 
 def _reads2_lever(docs: Path) -> list[float]:
     """The overlap read twice a contact: CPU ratio, its 95 % CI, the pairs."""
-    from .experiments.paired import cpu_ratio
+    from spreadlab.experiments.paired import cpu_ratio
 
     p = _lever_pairs(docs, "reads2_cases.csv", "reads2")
     return [*cpu_ratio(p), len(p)]
@@ -385,7 +385,7 @@ def _reads2_lever(docs: Path) -> list[float]:
 
 def _later_window_lever(docs: Path) -> list[float]:
     """The later window on the pile of 3 d: CPU ratio, its 95 % CI, the pairs, MFR shift in % and its 90 % CI."""
-    from .experiments.paired import cpu_ratio, relative_shift
+    from spreadlab.experiments.paired import cpu_ratio, relative_shift
 
     p = _lever_pairs(docs, "cases.csv", "window5_pile3")
     return [*cpu_ratio(p), len(p), *(100 * x for x in relative_shift(p, "mfr"))]

@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..figures import new_figure, save_figure
-from .cells import COUNT
-from .fit import HD_REF, N_REF, NoiseLaw
+from spreadlab.noise_law.cells import COUNT
+from spreadlab.noise_law.fit import HD_REF, N_REF, NoiseLaw
+from spreadmap.figures import new_figure, save_figure
 
 GROUPS = {"study": ("study_", "o", "tab:blue"), "fidelity presets": ("fidelity_presets", "s", "tab:orange"),
           "fidelity knobs": ("fidelity_k", "D", "tab:green"), "fidelity density x1e4": ("fidelity_fast", "v", "tab:olive"),
@@ -56,7 +56,7 @@ def law_figure(cells: dict[str, pd.DataFrame], laws: dict[str, NoiseLaw], stated
     dict of str to pathlib.Path
         The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
     """
-    from ..metrics.noise import calibration_factors
+    from spreadmap.metrics.noise import calibration_factors
     fig = new_figure(10.5, 8.0)
     axes = fig.subplots(2, 2)
     rows = []

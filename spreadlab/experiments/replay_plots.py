@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..figures import new_figure, save_figure
+from spreadmap.figures import new_figure, save_figure
 
 
 def plot_replay(paths: pd.DataFrame, honesty: pd.DataFrame, out: Path | str, shipped: str = "active_per_cpu"):

@@ -22,8 +22,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from .fit import LAW, NoiseLaw, fit_law, likelihood_ratio, profile_interval
-from .leave_one_out import leave_point_out, predictive_check, scored
+from spreadlab.noise_law.fit import LAW, NoiseLaw, fit_law, likelihood_ratio, profile_interval
+from spreadlab.noise_law.leave_one_out import leave_point_out, predictive_check, scored
 
 FREE = {"level": ("a",), "level_g": ("a", "g_ln_hd")}
 

@@ -15,7 +15,7 @@ run with: it is refused, naming the table, before anything is restored. A case d
 holds a raw record is never touched: a real result wins over a restored one. The loop's step
 records (converge/steps/step_N.json) are restored beside the cases, with modification times in the
 order the workflow made them (cases first, then each step), so that Snakemake sees them up to date.
-Every published file is checked against its folder's SHA256SUMS (spreadmap/study/checksums.py) before
+Every published file is checked against its folder's SHA256SUMS (spreadlab/study/checksums.py) before
 anything is restored from it: a table that changed since it was published is refused, naming the
 file and how to get it back or re-publish it.
 """
@@ -31,11 +31,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..case.identity import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, readable_id
-from ..files import write_text_atomically
-from ..loop.stepper import step_number
-from ..records import CorruptFileError, read_metrics
-from .checksums import sha256, verified_bytes
+from spreadlab.study.checksums import sha256, verified_bytes
+from spreadmap.case.identity import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, readable_id
+from spreadmap.files import write_text_atomically
+from spreadmap.loop.stepper import step_number
+from spreadmap.records import CorruptFileError, read_metrics
 
 # Columns of a results table that are the table's labels of a case, not the case's metrics.
 LABEL_COLUMNS = ("sweep", "index", "k", "index_in_lattice", "name", "batch", "lds", "knob", "value", "is_base")
@@ -158,7 +158,7 @@ def restore_cases(tables: list[Path | str], workdir: Path | str, mtime: float) -
 
     Raises
     ------
-    spreadmap.study.checksums.PublishedFileError
+    spreadlab.study.checksums.PublishedFileError
         If a table does not match its published checksum or no manifest lists it.
     UnkeyedTableError
         If a table's case ids have no content key or do not name the row's own preset, design
@@ -234,7 +234,7 @@ def restore_steps(steps: list[Path | str], workdir: Path | str, mtime: float) ->
 
     Raises
     ------
-    spreadmap.study.checksums.PublishedFileError
+    spreadlab.study.checksums.PublishedFileError
         If a record does not match its published checksum or no manifest lists it.
     """
     out = []

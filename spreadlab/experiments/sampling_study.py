@@ -66,10 +66,10 @@ from typing import Callable, Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..design import NAMES, to_physical
-from ..sampling import halton_unit as lds_points  # the workflow's own LDS and lattice points
-from ..sampling import lattice_unit as lattice_points
-from ..study_rule import rule as cv
+from spreadmap.design import NAMES, to_physical
+from spreadmap.sampling import halton_unit as lds_points  # the workflow's own LDS and lattice points
+from spreadmap.sampling import lattice_unit as lattice_points
+from spreadmap.study_rule import rule as cv
 
 D = len(NAMES)
 

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .noise import flow_trend_batch_z
+from spreadmap.metrics.noise import flow_trend_batch_z
 
 
 def _series(raw: dict) -> tuple[np.ndarray, np.ndarray]:

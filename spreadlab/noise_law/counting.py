@@ -11,8 +11,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..design import NAMES
-from ..table import usable_cases
+from spreadmap.design import NAMES
+from spreadmap.table import usable_cases
+from spreadmap.targets import names as target_names
 
 
 def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name"), level: float = 0.9) -> pd.DataFrame:
@@ -60,7 +61,7 @@ def counting_constant(cases: pd.DataFrame, presets: dict, group=("preset", "name
         row = {**key, **{name: cell[name].iloc[0] for name in NAMES}, "seeds": len(cell)}
         dof = len(cell) - 1
         lo_q, hi_q = stats.chi2.ppf([(1 + level) / 2, (1 - level) / 2], dof) if dof > 0 else (math.nan, math.nan)
-        for name in ("mfr", "pd"):
+        for name in target_names("base"):
             mean, sd = cell[name].mean(), cell[name].std(ddof=1)
             n = float(cell["n_passed"].mean()) if counted else mean * spheres_per_fraction
             c = sd / mean * math.sqrt(n)

@@ -40,13 +40,13 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from ..design import NAMES, to_physical, to_unit
-from ..files import write_text_atomically
-from ..loop import active
-from ..loop.map_criteria import map_grids
-from ..loop.model import make_map_fit
-from ..sampling import halton_unit, lattice_unit
-from .sampling_study import flow_curve
+from spreadlab.experiments.sampling_study import flow_curve
+from spreadmap.design import NAMES, to_physical, to_unit
+from spreadmap.files import write_text_atomically
+from spreadmap.loop import active
+from spreadmap.loop.map_criteria import map_grids
+from spreadmap.loop.model import make_map_fit
+from spreadmap.sampling import halton_unit, lattice_unit
 
 MEAN, SD = 0.29, 0.085
 # ln CPU seconds of a default-preset case on this scene: least squares on 60 finished cases

@@ -1,5 +1,5 @@
 """An arm against a base arm, case by case (same point, same packing seed): the numbers of a scene
-change's A/B (tools/paired_arms.py prints them; spreadmap.readme_numbers re-derives the README's).
+change's A/B (tools/paired_arms.py prints them; spreadlab.readme_numbers re-derives the README's).
 
 ``pairs`` joins the two arms' finished cases; ``cpu_ratio`` is the geometric mean of the pairs' CPU
 ratios with a t interval on the log ratios; ``relative_shift`` the pooled mean relative difference

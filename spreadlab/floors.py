@@ -22,9 +22,9 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..design import NAMES, Design, h_over_d
-from ..table import flagged as table_flagged
-from ..table import usable_cases
+from spreadmap.design import NAMES, Design, h_over_d
+from spreadmap.table import flagged as table_flagged
+from spreadmap.table import usable_cases
 
 
 def ratio_quantile(m_a, s_a, m_b, s_b, q: float, lo: float = 1e-3, hi: float = 1e3, iterations: int = 80) -> np.ndarray:

@@ -17,10 +17,10 @@ from typing import Mapping, Sequence
 
 import pandas as pd
 
-from ..noise_law.apply import case_noise
-from .cost import PlannedCost
-from .model import make_map_fit
-from .stepper import step, step_number
+from spreadmap.loop.cost import PlannedCost
+from spreadmap.loop.model import make_map_fit
+from spreadmap.loop.stepper import step, step_number
+from spreadmap.noise_law.apply import case_noise
 
 
 def run_steps(run_dir: Path | str) -> list[dict]:

@@ -1,4 +1,4 @@
-"""The figures of the two floors' comparison (numbers from spreadmap.maps.floors)."""
+"""The figures of the two floors' comparison (numbers from spreadlab.floors)."""
 from __future__ import annotations
 
 import matplotlib
@@ -9,9 +9,9 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 
-from ..figures import save_figure  # noqa: E402
-from ..targets import short  # noqa: E402
-from .style import HATCH  # noqa: E402
+from spreadmap.figures import save_figure  # noqa: E402
+from spreadmap.maps.style import HATCH  # noqa: E402
+from spreadmap.targets import short  # noqa: E402
 
 
 def plot_ratio_box(table: pd.DataFrame, targets, stem, names: tuple[str, str], hollow_d: float | None = None) -> dict:
@@ -24,7 +24,7 @@ def plot_ratio_box(table: pd.DataFrame, targets, stem, names: tuple[str, str], h
     Parameters
     ----------
     table : pandas.DataFrame
-        ``spreadmap.maps.floors.compare``'s table over the box (also the CSV saved).
+        ``spreadlab.floors.compare``'s table over the box (also the CSV saved).
     targets : sequence of str
         The targets, one panel each.
     stem : pathlib.Path or str
@@ -80,7 +80,7 @@ def plot_side_by_side(grid: pd.DataFrame, targets, stem, names: tuple[str, str],
     Parameters
     ----------
     grid : pandas.DataFrame
-        ``spreadmap.maps.floors.compare``'s table over a (d, h) grid (also the CSV saved).
+        ``spreadlab.floors.compare``'s table over a (d, h) grid (also the CSV saved).
     targets : sequence of str
         The targets, one row of panels each.
     stem : pathlib.Path or str

@@ -12,9 +12,9 @@ import pandas as pd
 from scipy import stats
 from scipy.stats import qmc
 
-from ..case.identity import rounded
-from ..design import NAMES, Design, to_physical, to_unit
-from ..table import usable
+from spreadmap.case.identity import rounded
+from spreadmap.design import NAMES, Design, to_physical, to_unit
+from spreadmap.table import usable
 
 
 def choose_points(n: int, ranges: Design | Mapping, ran: pd.DataFrame, min_distance: float = 0.15,

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.ticker import NullFormatter
 
-from ..figures import N_LABEL, new_figure, save_figure
+from spreadmap.figures import N_LABEL, new_figure, save_figure
 
 
 # ----------------------------------------------------------------------------------------------
@@ -42,7 +42,7 @@ def plot_sampling_study(table: pd.DataFrame, path_stem,
     dict of str to pathlib.Path
         The files written, keyed ``png``, ``pdf``, ``csv`` (``figures.save_figure``).
     """
-    from .sampling_study import summarise  # local: keeps the plot module import-light
+    from spreadlab.experiments.sampling_study import summarise  # local: keeps the plot module import-light
 
     summ = summarise(table) if summary is None else summary
     keys = ["function", "method", "schedule"]

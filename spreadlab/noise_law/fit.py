@@ -147,7 +147,7 @@ def fit_law(cells: pd.DataFrame, terms=LAW, fixed: dict | None = None) -> NoiseL
     Parameters
     ----------
     cells : pandas.DataFrame
-        Seed-repeat cells of one target (``spreadmap.noise_law.cells.seed_cells``): ``s2`` (sample
+        Seed-repeat cells of one target (``spreadlab.noise_law.cells.seed_cells``): ``s2`` (sample
         variance, the target's units squared), ``dof``, ``mean`` and the columns the terms read
         (``n``, ``h_over_d``, ...).
     terms : sequence of str, optional

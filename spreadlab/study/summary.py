@@ -27,6 +27,7 @@ from spreadmap.design import h_over_d as gap_ratio
 from spreadmap.loop.stepper import step_number
 from spreadmap.surrogate.validation import by_band
 from spreadmap.table import flagged, partition, usable
+from spreadmap.targets import names as target_names
 
 NOT_YET = "not yet run"
 
@@ -129,7 +130,7 @@ def _study_rule(study: Path) -> list[str]:
         indices = set(lds["index"].astype(int))
         complete = [n for n in sorted(partitions) if all(i in indices for i in range(n))]
         if len(complete) >= 2:
-            table = convergence_table(partition(lds, max(complete), sweep=None), ("mfr", "pd"), complete,
+            table = convergence_table(partition(lds, max(complete), sweep=None), target_names("base"), complete,
                                       tolerance=tol, floors=floors)
             steps = ", ".join(f"{int(r['partition'])}: {100 * r['max_change']:.1f} %" for r in table.to_dict("records")[1:])
             hit = first_converged(table)
@@ -141,7 +142,7 @@ def _study_rule(study: Path) -> list[str]:
     if lattice is not None and len(lattice) and "k" in lattice:
         done = [k for k in ks if (lattice["k"] == k).sum() == k ** len(NAMES)]
         if len(done) >= 2:
-            table = convergence_table(lattice[lattice["k"].isin(done)], ("mfr", "pd"), tolerance=tol, floors=floors,
+            table = convergence_table(lattice[lattice["k"].isin(done)], target_names("base"), tolerance=tol, floors=floors,
                                       partition_col="k")
             steps = ", ".join(f"{int(r['partition'])}: {100 * r['max_change']:.1f} %" for r in table.to_dict("records")[1:])
             hit = first_converged(table)
@@ -179,8 +180,8 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
                          f"{worst['other']:.4g} against {worst['reference']:.4g})")
         names = ([f"LDS {n}"] if prefix else []) + ["lattice", f"LDS {max(complete)}"]
         means = {t: ([of_lds.loc[(t, "mean"), "other"]] if prefix else [])
-                 + [of_lattice.loc[(t, "mean"), "other"], of_lds.loc[(t, "mean"), "reference"]] for t in ("mfr", "pd")}
-        scatter = {t: of_lds.loc[(t, "std"), "reference"] / np.sqrt(n) for t in ("mfr", "pd")}
+                 + [of_lattice.loc[(t, "mean"), "other"], of_lds.loc[(t, "mean"), "reference"]] for t in target_names("base")}
+        scatter = {t: of_lds.loc[(t, "std"), "reference"] / np.sqrt(n) for t in target_names("base")}
         lines.append(f"- Matched size N = {n}, against LDS {max(complete)} (the largest sample): the five statistics of "
                      + " and of ".join(parts) + "; mean MFR " + ", ".join(f"{v:.4f}" for v in means["mfr"])
                      + " and PD " + ", ".join(f"{v:.4f}" for v in means["pd"]) + f" ({', '.join(names)}; "
@@ -191,7 +192,7 @@ def _matched_sizes(lds, lattice, ks, complete, floors) -> list[str]:
 
 def _verdict_words(low: float, high: float, level: float) -> str:
     """The coverage interval's verdict as the summary says it (surrogate.validation.coverage_verdict)."""
-    from ..surrogate.validation import coverage_verdict
+    from spreadmap.surrogate.validation import coverage_verdict
 
     words = {"too wide": f"the intervals are too wide (their coverage's CI lies above {100 * level:g} %)",
              "too narrow": f"the intervals are too narrow (their coverage's CI lies below {100 * level:g} %)",
@@ -241,7 +242,7 @@ def _intervals_by_band(study: Path, metrics: pd.DataFrame) -> list[str]:
     cases = pd.concat([t[["case_id", "h_um", "d_um"]] for t in tables if {"case_id", "h_um", "d_um"} <= set(t.columns)])
     h_over_d = pd.Series(gap_ratio(cases), index=cases.index).groupby(cases["case_id"]).first()
     lines = []
-    for target in ("mfr", "pd"):
+    for target in target_names("base"):
         oof = parity[(parity["model"] == map_model.iloc[0]) & (parity["target"] == target)]
         known = oof["case_id"].isin(h_over_d.index)
         if not known.any():

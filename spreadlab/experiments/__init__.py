@@ -6,7 +6,7 @@
   older sampling-design study with noise; ``cost_study`` -- the map per CPU hour.
 * ``experiment_plots`` -- the figures of the three sampling studies.
 * ``arms`` -- DEM studies in arms (benchmarks); ``paired`` -- an arm against a base arm, case by
-  case (tools/paired_arms.py, spreadmap.readme_numbers).
+  case (tools/paired_arms.py, spreadlab.readme_numbers).
 
 Run by benchmarks/replay.py, benchmarks/noisy_study.py and benchmarks/cost_study.py; the
 sampling study by the workflow (scripts/sampling_study.py).

@@ -18,12 +18,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .. import targets
-from ..design import NAMES, h_over_d
-from ..table import usable_cases as usable
-
-# the count behind each target's counting law (spreadmap.metrics.case)
-COUNT = {t.name: t.count_column for t in targets.REGISTRY.values() if t.count_column}  # mfr, pd
+from spreadmap.design import NAMES, h_over_d
+from spreadmap.noise_law.apply import COUNT  # the count behind each target's counting law: mfr, pd
+from spreadmap.table import usable_cases as usable
 
 
 def point_key(frame: pd.DataFrame) -> pd.Series:
@@ -204,7 +201,7 @@ def adhesive_cases(docs: Path, *, pile_reserve: float, surface_energy: float, ma
         If a shipped arm's rows are not of the scene (wrong preset, size or Bond number), or the
         same case reads differently in two tables.
     """
-    from ..case.powder import bond_number
+    from spreadmap.case.powder import bond_number
 
     tables = {k: Path(v) for k, v in (tables or {}).items()}
     picked = []

@@ -18,13 +18,15 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+import pandas as pd
 
-from ..case.identity import case_scene
-from ..case.launcher import run_case
-from ..case.render import render
-from ..design import NAMES
-from ..files import write_text_atomically
-from ..metrics.case import case_metrics
+from spreadmap.case.identity import case_scene
+from spreadmap.case.launcher import run_case
+from spreadmap.case.render import render
+from spreadmap.design import NAMES, TARGETS
+from spreadmap.files import write_csv_atomically, write_text_atomically
+from spreadmap.metrics.case import case_metrics
+from spreadmap.table import usable as table_usable
 
 
 def add_arguments(ap: argparse.ArgumentParser, points, arms, default_arms, keep: str) -> None:
@@ -87,16 +89,6 @@ def read_rows(path: Path | str) -> list[dict]:
     return list(csv.DictReader(io.StringIO(path.read_text())))
 
 
-def write_rows(path: Path | str, rows: list[dict], columns) -> None:
-    """Write the rows (atomically), `columns` in order, other keys left out."""
-    buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=list(columns), extrasaction="ignore")
-    writer.writeheader()
-    writer.writerows(rows)
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomically(Path(path), buf.getvalue())
-
-
 def number(x) -> float:
     """A CSV cell as a float (NaN for an empty or non-numeric one)."""
     try:
@@ -114,7 +106,7 @@ def run_jobs(jobs: list[dict], run_one: Callable[[dict], dict], rows: list[dict]
         for fut in as_completed(futures):
             row = fut.result()
             rows.append(row)
-            write_rows(out, rows, columns)
+            write_csv_atomically(out, rows, columns)
             print(describe(row), flush=True)
     return rows
 
@@ -129,12 +121,16 @@ def mean_se(group: list[dict], key: str) -> tuple[float, float, int]:
 
 
 def usable(rows: list[dict]) -> list[dict]:
-    """Rows of cases that finished and were not flagged."""
-    return [r for r in rows if r.get("status") == "ok" and str(r.get("flagged")) == "False"]
+    """Rows of cases that finished and were not flagged: the product's one rule
+    (spreadmap.table.usable) on the rows; a row read from the CSV holds its flag as text, so a case
+    is flagged unless its flag reads False."""
+    frame = pd.DataFrame({"status": [r.get("status") for r in rows],
+                          "flagged": [str(r.get("flagged")) != "False" for r in rows]})
+    return [r for r, keep in zip(rows, table_usable(frame)) if keep]
 
 
-def arm_summary(rows: list[dict], points, arms, reference: str, keys=("mfr", "pd", "coverage"),
-                differences=("mfr", "pd"), extra: dict[str, Callable[[list[dict]], str]] | None = None) -> str:
+def arm_summary(rows: list[dict], points, arms, reference: str, keys=(*TARGETS, "coverage"),
+                differences=TARGETS, extra: dict[str, Callable[[list[dict]], str]] | None = None) -> str:
     """A markdown table per point and arm: each of `keys` (mean of the seeds ± SE from their spread),
     the difference of each of `differences` from the `reference` arm ± SE, the CPU per case (median),
     and `extra` columns (header -> function of the arm's rows at the point, flagged included)."""

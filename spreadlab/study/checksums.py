@@ -1,7 +1,7 @@
 """Checksums of published results: a published folder under docs/ holds a manifest, SHA256SUMS,
 in the format of coreutils' `sha256sum` (one `<sha256>  <path>` line per file, paths relative to
 the folder), listing its cases tables and whatever else a restore reads from it. The restore
-(spreadmap/study/restore.py, tools/restore_study.py) verifies every file it reads against it before it
+(spreadlab/study/restore.py, tools/restore_study.py) verifies every file it reads against it before it
 restores a case, so that a published table that rotted (edited by hand, truncated, corrupted) is
 refused instead of restored; tools/publish_checksums.py re-makes the manifests after a publish.
 
@@ -16,7 +16,7 @@ import hashlib
 import re
 from pathlib import Path
 
-from ..files import write_text_atomically
+from spreadmap.files import write_text_atomically
 
 MANIFEST = "SHA256SUMS"
 # What a study folder's manifest lists: what tools/restore_study.py reads from it
