@@ -13,7 +13,7 @@ Prediction: mean rho m_lo + m_delta, variance rho^2 s_lo^2 + s_delta^2 (independ
 expensive run's noise is the discrepancy model's per-case noise. The expensive cases need not be
 nested in the cheap ones (the cheap GP's variance at them is carried).
 
-Used to compare routes to the truth level (issue 64): against a GP on the expensive cases alone and
+Lab code until the maps use it (issue 64): used to compare routes to the truth level: against a GP on the expensive cases alone and
 against a scaling rule of the cheap level, scored on held-out expensive cases.
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ import math
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .models import GPModel
+from spreadmap.surrogate.models import GPModel
 
 
 class AR1Model:

@@ -1,4 +1,4 @@
-"""The AR(1) multi-fidelity model (spreadmap.surrogate.multifidelity) on synthetic levels of known
+"""The AR(1) multi-fidelity model (spreadlab.multifidelity) on synthetic levels of known
 truth and known noise: many cheap cases and a few expensive ones recover the expensive level better
 than the expensive cases alone, its scale rho is found, and its intervals hold the truth at about the
 stated rate."""
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.stats import binomtest, qmc
 
+from spreadlab.multifidelity import AR1Model
 from spreadmap.surrogate.models import GPModel
-from spreadmap.surrogate.multifidelity import AR1Model
 
 LOW = np.array([0.15, 10.0, 55.0, 5.0])
 HIGH = np.array([0.45, 50.0, 75.0, 15.0])
