@@ -241,8 +241,39 @@ def _machine_speed(docs: Path) -> list[float]:
             _prose(mj, "The same run again, {} min later")[0]]
 
 
+def _guide3_replays(docs: Path) -> list[float]:
+    """The shipped loop on the adhesive truth (stopped, replays, honest, stops, CI, median and p90 cases and
+    modelled CPU h) and on the shipped run's truth (honest, replays, CI, stops at 56 of them, CPU h median, p90)."""
+    conv = _config(docs)["converge"]
+    st = _csv(docs / "replay" / "adhesive" / "batch8" / "stops.csv")
+    st = st[(st["design"] == f"active_per_cpu_b{conv['batch']}") & (st["rule"] == "bare estimate")
+            & (st["margin"].astype(float) == float(conv["map_error"]["margin"]))]
+    a = st[st["stopped"].astype(bool)]
+    k = int(a["true_within"].astype(bool).sum())
+    sw = _csv(docs / "replay" / "adhesive" / "steady_window" / "stops_margin1.csv")
+    b = sw[sw["stopped"].astype(bool)]
+    kb = int(b["true_within"].astype(bool).sum())
+    return [len(a), len(st), k, len(a), *_exact_ci(k, len(a)), a["n"].median(), a["n"].quantile(0.9),
+            a["cpu_h"].median(), a["cpu_h"].quantile(0.9),
+            kb, len(sw), *_exact_ci(kb, len(b)), int((b["n"] == conv["min_stop_cases"]).sum()), len(sw),
+            conv["min_stop_cases"], b["cpu_h"].median(), b["cpu_h"].quantile(0.9)]
+
+
+def _powder(docs: Path, powder: str, kind: str = "fastest") -> list[float]:
+    """A powder's best setting in the shipped run: h, v, coverage and thickness / h (low, high over its range)."""
+    r = _recommendation(docs, powder, kind)
+    return [r["h_um"], r["v_mm_s"], r["coverage_mean_low"], r["coverage_mean_high"],
+            r["thickness_ratio_mean_low"], r["thickness_ratio_mean_high"]]
+
+
+def _below(value: float, bound: float) -> float:
+    """``bound`` when ``value`` is below it (a "below 0.001" claim), else NaN."""
+    return bound if value < bound else math.nan
+
+
 README = "README.md"
 GUIDE3, GUIDE5 = "docs/guide/03-convergence.md", "docs/guide/05-decisions.md"
+GUIDE_INDEX = "docs/guide/README.md"
 
 CLAIMS: list[Claim] = [
     Claim("front figure: the Bond number at the range's smallest and largest d",
@@ -308,6 +339,53 @@ CLAIMS: list[Claim] = [
     Claim("density x1000 against x10: MFR low at d 45 um and d 15 um",
           "at density x1000 MFR reads {} % (d 45 um) to {} % (d 15 um) below density x10",
           "docs/adhesion/scaling_cases.csv: per point (x10 - x1000) / x10 of the mean MFR", _adhesion_x1000_low),
+    Claim("guide 3: the main job's loop (config converge:)",
+          "(`converge:`): {} LDS cases at the `default` preset, then batches of {}, half continuing the LDS "
+          "sequence and half where the map is least sure per planned CPU-second, until **the map's own error "
+          "is within {} (MFR and PD)**, judged from {} cases on, or the budget is spent ({} cases or **{} "
+          "modelled CPU hours**)",
+          "config.yaml converge (the shipped run's settings equal to them)", lambda d: _run_ran_the_config(d, _loop(d)),
+          GUIDE3),
+    Claim("guide 3: the shipped run's stop", "density x{}) stopped at {} cases, its map error MFR {} and PD {}.",
+          "config.yaml presets.default.density_scale; " + SHIPPED_RUN + "stopped.json",
+          lambda d: [_config(d)["presets"]["default"]["density_scale"], *(lambda x: [x[0], x[4], x[5]])(_shipped_stop(d))],
+          GUIDE3),
+    Claim("guide 3: the shipped loop's replays (adhesive truth; the shipped run's truth)",
+          "{} of {} replays stopped, **{} of {} within 0.02 (95 % CI {}-{})**, at {} cases (median; p90 {}) and {} "
+          "modelled CPU h (p90 {}). On a truth fitted on the shipped run's usable cases (run_2026-12-07e, the "
+          "shipped scene; pre-registered, no seed chose the rule): **{} of {} within 0.02 (95 % CI {}-{})**, {} of "
+          "{} at {} cases, {} modelled CPU h (median; p90 {})",
+          "docs/replay/adhesive/batch8/stops.csv (the config's design and margin), "
+          "docs/replay/adhesive/steady_window/stops_margin1.csv: stopped, true_within, n, cpu_h; Clopper-Pearson",
+          _guide3_replays, GUIDE3),
+    Claim("guide 3: the shipped run's minutes to its maps, the same cases' CPU 70 min later",
+          "wrote its maps {} min after the command on this machine; the same cases ran at {}x the CPU {} min later",
+          SHIPPED_RUN + "timeline.csv (+ the set-up); docs/main_job/README.md prose",
+          lambda d: [_analyses_written(d), *_machine_speed(d)[4:]], GUIDE3),
+    Claim("guide 5: the bounds and confidence", "with the shipped bounds (coverage >= {}, layer thickness >= {} h) at {} %",
+          "config.yaml decisions", lambda d: (lambda b: [b[0], b[1], 100 * b[2]])(_bounds(d)), GUIDE5),
+    Claim("guide 5: `fine` in the shipped run",
+          "`fine` (f {}, d {} um): at best P {} within the data; only beyond it does a setting reach P {}, the "
+          "fastest h {} um, v {} mm/s (coverage {}, thickness {} h)",
+          SHIPPED_RUN + "recommendations.csv (fine, fastest)",
+          lambda d: (lambda f, p: [f[0], f[1], f[5], f[2], f[3], f[4], p[2], p[4]])(_fine(d), _powder(d, "fine")), GUIDE5),
+    Claim("guide 5: `medium_range` in the shipped run",
+          "`medium_range` (f {}-{}, d {}-{} um, the whole range): P below {} everywhere in the data; at its best "
+          "setting, h {} um, v {} mm/s, coverage {}-{} and thickness {}-{} h",
+          SHIPPED_RUN + "recommendations.csv (medium_range): f, d range, best_probability_in_data, h, v, coverage, thickness",
+          lambda d: (lambda r, p: [r["f_low"], r["f_high"], r["d_um_low"], r["d_um_high"],
+                                   _below(r["best_probability_in_data"], 0.001), *p])(
+              _recommendation(d, "medium_range"), _powder(d, "medium_range")), GUIDE5),
+    Claim("guide 5: `coarse` in the shipped run",
+          "`coarse` (f {}, d {} um): P below {}; at its best, h {} um, v {} mm/s, coverage {} and thickness {} h",
+          SHIPPED_RUN + "recommendations.csv (coarse)",
+          lambda d: (lambda r, p: [r["f_low"], r["d_um_low"], _below(r["best_probability_in_data"], 0.001),
+                                   p[0], p[1], p[2], p[4]])(_recommendation(d, "coarse"), _powder(d, "coarse")), GUIDE5),
+    Claim("guide 5: density x1000 against x10", "MFR reads {}-{} % below density x10",
+          "docs/adhesion/scaling_cases.csv", _adhesion_x1000_low, GUIDE5),
+    Claim("guide index: the shipped run", "rough floor; {} cases, maps at {} min)",
+          SHIPPED_RUN + "stopped.json n; timeline.csv (+ the set-up)",
+          lambda d: [_stop(d, SHIPPED)["n"], _analyses_written(d)], GUIDE_INDEX),
 ]
 
 

@@ -26,10 +26,25 @@ def test_every_readme_number_rounds_to_what_the_tables_give():
 
 
 def test_every_guide_claim_of_what_is_current_rounds_to_what_the_tables_give():
+    """The guide's numbers of the shipped run, its replay and the config (guide 3, guide 5, the index)."""
     rows = check_pages(ROOT, DOCS)
     bad = [f"{r.status}: page {r.stated}, derived {r.derived:.5g} ({r.label}; {r.source})"
            for r in rows if r.status != "ok"]
     assert not bad, "\n".join(bad)
+    assert {c.page for c in CLAIMS} >= {"README.md", "docs/guide/03-convergence.md", "docs/guide/05-decisions.md"}
+    assert len(rows) == sum(c.phrase.count("{}") for c in CLAIMS)
+
+
+def test_a_guide_number_changed_fails_the_check(tmp_path):
+    """A guide page's stale number fails like README's: guide 3 saying batches of 16 again."""
+    guide = tmp_path / "docs" / "guide"
+    guide.mkdir(parents=True)
+    for page in {c.page for c in CLAIMS}:
+        (tmp_path / page).write_text((ROOT / page).read_text())
+    three = tmp_path / "docs/guide/03-convergence.md"
+    three.write_text(three.read_text().replace("then batches of 8, half", "then batches of 16, half"))
+    rows = check_pages(tmp_path, DOCS)
+    assert [(r.stated, r.status) for r in rows if r.status != "ok"] == [("16", "MISMATCH")]
 
 
 def test_a_readme_number_changed_by_one_digit_fails_the_check():
