@@ -16,7 +16,7 @@ The convention these tests hold the pages to:
    ``history`` (or ``before the shipped scene``). A figure is current only if it names a run folder
    from ``run_2026-12-07e`` on, or a date after 2026-12-07.
 3. **A run cited in the text** (``run_2026-12-04``, ``the run of 2026-12-01``, ``the main job of
-   2026-12-06``) **from before the shipped scene sits in a sentence, list item or section marked as
+   2026-12-06``, ``the 2026-12-01 run``) **from before the shipped scene sits in a sentence, list item or section marked as
    history**: the sentence (or the enclosing list item, or one of its headings) contains
    ``history``/``historical``, ``before the shipped scene`` or ``the scene before``.
    Everything else on these pages is read as current.
@@ -36,7 +36,8 @@ NOT_RESULTS = {"rulegraph.png"}  # figures that show no result: the workflow's D
 IMAGE = re.compile(r"!\[([^\]]*)\]\(([^)\s]+)\)")
 RUN_FOLDER = re.compile(r"run_(\d{4}-\d{2}-\d{2})([a-z]?)(\w*)")
 DATE = re.compile(r"\b(\d{4}-\d{2}-\d{2})\b")
-RUN_OF_DATE = re.compile(r"\b(?:run|runs|job|job's run|job's runs)\s+of\s+(\d{4}-\d{2}-\d{2})\b")
+RUN_OF_DATE = re.compile(r"\b(?:run|runs|job)\s+(?:of|on|from)\s+(\d{4}-\d{2}-\d{2})\b"
+                         r"|\b(\d{4}-\d{2}-\d{2})(?:'s)?\s+(?:main job|run)\b")
 POWDER = re.compile(r"\b(dry|adhesive|no DEM)\b")
 HISTORY = re.compile(r"\bhistor(?:y|ical)\b|before the shipped scene|the scene before", re.IGNORECASE)
 
@@ -109,7 +110,7 @@ def stale_citations(text: str) -> list[str]:
         block_history = HISTORY.search(heading) or (block.lstrip().startswith(("-", "*")) and HISTORY.search(prose))
         for sentence in sentences(prose):
             old = [f"run_{d}{s}{rest}" for d, s, rest in RUN_FOLDER.findall(sentence) if not on_shipped_scene(d, s)]
-            old += [f"run of {d}" for d in RUN_OF_DATE.findall(sentence) if d < SHIPPED[0]]
+            old += [f"run of {a or b}" for a, b in RUN_OF_DATE.findall(sentence) if (a or b) < SHIPPED[0]]
             if old and not (block_history or HISTORY.search(sentence)):
                 bad.append(f"{', '.join(old)}: {sentence[:160]}")
     return bad
@@ -153,3 +154,5 @@ def test_the_convention_catches_an_old_run_presented_as_current():
     assert stale_citations("- run_2026-12-07d was stopped by hand. History, not shipped.\n") == []
     assert stale_citations("- run_2026-12-07d was stopped by hand. It is shipped.\n")
     assert stale_citations("```\nrun_2026-12-04\n```\n") == []
+    assert stale_citations("The 2026-12-01 run's ranking is below.\n")
+    assert stale_citations("The main job's run on 2026-12-08 is below.\n") == []
