@@ -13,8 +13,8 @@ Prediction: mean rho m_lo + m_delta, variance rho^2 s_lo^2 + s_delta^2 (independ
 expensive run's noise is the discrepancy model's per-case noise. The expensive cases need not be
 nested in the cheap ones (the cheap GP's variance at them is carried).
 
-Lab code until the maps use it (issue 64): used to compare routes to the truth level: against a GP on the expensive cases alone and
-against a scaling rule of the cheap level, scored on held-out expensive cases.
+Lab code until the maps use it (issue 64): it is one route to the truth level, to be compared with
+a GP on the expensive cases alone and with a scaling rule of the cheap level on held-out cases.
 """
 from __future__ import annotations
 

@@ -1,12 +1,17 @@
-"""The numbers README.md states, re-derived from the published tables under docs/ (issue 52).
+"""The numbers README.md states (and the guide, where it states what is current), re-derived from
+the published tables under docs/ and the shipped config.yaml (issues 52, 65).
 
-Each claim is a phrase of README.md with ``{}`` where a number stands, the tables it comes from
-(file, column, statistic) and a function that computes those numbers from them. A stated number
-holds when the derived one rounds to it: the tolerance is half a unit of its last printed digit
-(README's rounding), so "1.41" holds 1.405-1.415 and "23" holds 22.5-23.5. A phrase no longer in
-README.md is reported as not found (the claim then needs its new wording here). A few numbers are
-in no table, only in the prose of a published page (the main job's wall times): those are checked
-against that page's text, and say so. ``tools/readme_numbers.py`` prints the check;
+Each claim is a phrase of a page (README.md unless it names another) with ``{}`` where a number
+stands, the tables it comes from (file, column, statistic) and a function that computes those
+numbers from them. A stated number holds when the derived one rounds to it: the tolerance is half a
+unit of its last printed digit (the page's rounding), so "1.41" holds 1.405-1.415 and "23" holds
+22.5-23.5. A phrase no longer on its page is reported as not found (the claim then needs its new
+wording here). A few numbers are in no table, only in the prose of a published page (this
+machine's speed on other days): those are checked against that page's text, and say so.
+
+The front page's numbers describe the shipped product: the run ``docs/main_job/run_2026-12-07e``
+(the main job on the shipped scene from a clean clone), its replay and the config; the history is
+in docs/CHANGELOG.md, which no claim reads. ``tools/readme_numbers.py`` prints the check;
 ``tests/docs/test_readme_numbers.py`` runs it on the committed tables.
 """
 from __future__ import annotations
@@ -19,24 +24,20 @@ from functools import cache
 from pathlib import Path
 from typing import Callable, Sequence
 
-import numpy as np
 import pandas as pd
-from scipy import stats
-
-from spreadmap import design
-from spreadmap.run_report import set_summary
 
 NUMBER = r"([-+]?\d+(?:\.\d+)?)"
 
 
 @dataclass(frozen=True)
 class Claim:
-    """One README phrase with its numbers (``{}``), their source and their derivation."""
+    """One phrase of a page with its numbers (``{}``), their source and their derivation."""
 
     label: str
     phrase: str
     source: str
-    derive: Callable[[Path], Sequence]  # per number a float, or (float, error it carries beyond README's rounding)
+    derive: Callable[[Path], Sequence]  # per number a float, or (float, error it carries beyond the page's rounding)
+    page: str = "README.md"  # the page that states it, relative to the repository
 
 
 @dataclass(frozen=True)
@@ -87,9 +88,17 @@ def _json(path: Path):
     return json.loads(path.read_text())
 
 
+@cache
+def _config(docs: Path) -> dict:
+    """The shipped config.yaml (the repository's, beside docs/)."""
+    import yaml
+
+    return yaml.safe_load((docs.parent / "config.yaml").read_text())
+
+
 def _prose(path: Path, phrase: str) -> list[float]:
     """Numbers a published page states in its prose (for numbers no table holds)."""
-    match = phrase_regex(phrase).search(path.read_text())
+    match = phrase_regex(phrase).search(" ".join(path.read_text().split()))
     return [float(x) for x in match.groups()] if match else [math.nan] * phrase.count("{}")
 
 
@@ -97,226 +106,80 @@ def _run(docs: Path, day: str) -> Path:
     return docs / "main_job" / f"run_{day}"
 
 
-def _heldout(docs: Path, folder: str, target: str) -> dict:
-    return next(s for s in _json(docs / "main_job" / folder / "score.json") if s["target"] == target)
-
-
-def _chi2_upper(rmse: float, n: int) -> float:
-    """95 % upper bound of an RMS error over n points (chi-square on n dof)."""
-    return rmse * math.sqrt(n / stats.chi2.ppf(0.05, n))
-
-
-def _cpu_share_of_corner_cases(docs: Path) -> list[float]:
-    c = _csv(_run(docs, "2026-12-04") / "cases.csv")
-    corner = (c["d_um"] <= 12.5) & (design.h_over_d(c) >= 5.5)
-    return [100 * c.loc[corner, "cpu_time"].sum() / c["cpu_time"].sum()]
-
-
-def _main_job_cpu(docs: Path) -> list[float]:
-    cpu = _csv(_run(docs, "2026-12-04") / "cases.csv")["cpu_time"]
-    return [cpu.median(), cpu.max(), cpu.max() / cpu.median()]
-
-
-def _seed_cv_rms(per_point: Path, preset: str) -> list[float]:
-    """RMS over the points of the seed-to-seed CV (per_point.csv's SD / mean), in %."""
-    p = _csv(per_point)
-    p = p[p["preset"] == preset]
-    return [100 * math.sqrt(float(np.mean((p[f"{t}_sd"] / p[f"{t}_mean"]) ** 2))) for t in ("mfr", "pd")]
-
-
-def _preset(presets: Path, preset: str) -> pd.Series:
-    p = _csv(presets)
-    return p[p["preset"] == preset].iloc[0]
-
-
-def _factor(docs: Path, target: str) -> dict:
-    return _json(docs / "fidelity" / "correction" / "correction.json")["targets"][target]
-
-
-def _arm_point_cpu_ratio(cases: pd.DataFrame, arm: str, base: str) -> pd.Series:
-    """Per point, the mean CPU of an arm's finished cases over the base arm's."""
-    m = cases[cases["status"] == "ok"].groupby(["arm", "point"])["cpu_time"].mean()
-    return m[arm] / m[base]
-
-
-def _adhesion(docs: Path) -> list[float]:
-    a = _csv(docs / "adhesion" / "scaling_cases.csv")
-    ok = a[a["status"] == "ok"]
-    cpu = ok.groupby("arm")["cpu_time"]
-    geo = {arm: float(np.exp(np.log(_arm_point_cpu_ratio(a, arm, base)).mean()))
-           for arm, base in (("adh_x1000", "dry_x1000"), ("adh_x100", "adh_x1000"), ("adh_x10", "adh_x1000"))}
-    mfr = ok[~ok["flagged"].astype(bool)].groupby(["arm", "point"])["mfr"].mean()
-    low = {arm: 100 * (mfr["adh_x10"] - mfr[arm]) / mfr["adh_x10"] for arm in ("adh_x1000", "adh_x100")}
-    return [geo["adh_x1000"], cpu.median()["adh_x1000"], cpu.median()["dry_x1000"],
-            cpu.max()["adh_x1000"], cpu.max()["dry_x1000"],
-            low["adh_x1000"]["coarse"], low["adh_x1000"]["fine"], low["adh_x100"].min(), low["adh_x100"].max(),
-            geo["adh_x100"], geo["adh_x10"]]
-
-
-def _size_distribution(docs: Path) -> list[float]:
-    c = _csv(docs / "size_distribution" / "cost_cases.csv")
-    c = c[c["seed"].astype(int) <= 2]  # the run that held every arm, interleaved (seeds 3-8: the tails' arms alone)
-    cpu = c[c["status"] == "ok"].groupby("arm")["cpu_time"]
-    d5, d1 = _arm_point_cpu_ratio(c, "span1_d5", "one_size"), _arm_point_cpu_ratio(c, "span1_d1", "one_size")
-    return [d5["coarse"], d5["fine"], cpu.median()["span1_d5"], cpu.median()["one_size"],
-            cpu.max()["span1_d5"], cpu.max()["one_size"], d1.min(), d1.max()]
-
-
-def _overlap_stride(docs: Path) -> list[float]:
-    o = _csv(docs / "case_cost" / "overlap_stride.csv")
-    pairs = o.pivot_table(index=["point", "seed"], columns="arm", values="cpu_time")
-    logs = np.log(pairs["stride"] / pairs["every_step"])
-    se = logs.std(ddof=1) / math.sqrt(len(logs))  # benchmarks/overlap_stride.py: normal 95 %
-    return [math.exp(logs.mean()), math.exp(logs.mean() - 1.96 * se), math.exp(logs.mean() + 1.96 * se), len(logs)]
-
-
-def _heap_size(docs: Path) -> list[float]:
-    """A heap of 3 h^2: its CPU over 4.7 h^2's at the corner and at the wide point, the corner's MFR
-    shift from 4.7 h^2, its SE, and the corner's h/d (the README's order)."""
-    h = _csv(docs / "heap_size" / "cases.csv")
-    rough = h[(h["floor"] == "rough") & (h["status"] == "ok")]  # flagged kept, as docs/heap_size reads them
-    cpu = rough.groupby(["point", "pile_reserve"])["cpu_time"].median()
-    corner = rough[rough["point"] == "corner"].groupby("pile_reserve")["mfr"]
-    se = corner.std() / np.sqrt(corner.count())
-    return [cpu["corner", 3.0] / cpu["corner", 4.7], cpu["wide", 3.0] / cpu["wide", 4.7],
-            corner.mean()[3.0] - corner.mean()[4.7], math.hypot(se[3.0], se[4.7]),
-            float(design.h_over_d(rough[rough["point"] == "corner"].iloc[0]))]
-
-
-def _md_ratio(path: Path, what: str) -> list[tuple[float, float]]:
-    """An A/B summary's "arm / shipped = R (... L-H)" line, as shipped / arm: 1/R (1/H-1/L), each
-    with the error its inversion carries from the summary's two decimals (0.005 / x^2)."""
-    m = re.search(what + r" = ([\d.]+) \(95 % interval from resampling seeds ([\d.]+)-([\d.]+)\)",
-                  path.read_text())
-    r, lo, hi = (float(x) for x in m.groups())
-    return [(1 / x, 0.005 / x ** 2) for x in (r, hi, lo)]
-
-
-def _issue31(docs: Path) -> list:
-    cc = docs / "case_cost"
-    seven = _md_ratio(cc / "final_summary.md", r"CPU\*\*: the points' mean CPU summed, arm / shipped")
-    corner = _md_ratio(cc / "final_corner_summary.md", r"CPU\*\*: the points' mean CPU summed, arm / shipped")
-    box = _json(cc / "cost_map.json")["mean_ratio"]
-    return [*seven, *corner, box["ratio"], *box["ci95"]]
-
-
-def _cost_map_default(docs: Path) -> list[float]:
-    rows = _json(docs / "case_cost" / "cost_map.json")["rows"]
-    r = next(r for r in rows if (r["arm"], r["preset"], r["scale"]) == ("shipped", "default", "this machine"))
-    return [r["median"], r["max"], r["max_over_median"], *_main_job_cpu(docs)]
-
-
-def _issue31_mfr(docs: Path) -> list[float]:
-    m = re.search(r"issue31_start, MFR\*\*: chi-square over the (\d+) points = ([\d.]+) \(\d+ dof, p = ([\d.]+)",
-                  (docs / "case_cost" / "final_summary.md").read_text())
-    return [float(m[2]), float(m[1]), float(m[3])]
-
-
-def _floors(docs: Path) -> list[float]:
-    b = _csv(docs / "floors" / "compare" / "by_band.csv")
-    b = b[b["target"] == "mfr"]
-    thin, wide = b[b["h_over_d_below"] <= 2.0], b[b["h_over_d_from"] >= 5.0]
-    return [wide["ratio_median"].iloc[0], thin["ratio_median"].min(), thin["ratio_median"].max(),
-            thin["ratio_min"].min(), thin["ratio_max"].max()]
-
-
-def _noise_adhesive(docs: Path) -> list[float]:
-    law = _json(docs / "noise" / "adhesive" / "law.json")
-    by_hd = [(hd, x) for t in ("mfr", "pd") for table in [law["targets"][t]["factor_over_dry"][law["chosen"]]]
-             for hd, x in zip(table["h_over_d"], table["factor"])]
-    out = [law["points"], law["dof"]]
-    for lo, hi in ((1.1, 1.1), (2.0, 2.0), (4.0, 6.0)):
-        f = [x for hd, x in by_hd if lo <= hd <= hi]
-        out += [min(f), max(f)]
-    return out
-
-
-def _replay_row(path: Path) -> pd.Series:
-    h = _csv(path)
-    return h[(h["rule"].str.startswith("x1.7")) & (h["tolerance"] == 0.02) & (h["design"] == "active_per_cpu")].iloc[0]
-
-
-def _map_tolerance(docs: Path, day: str) -> float:
-    """The MFR tolerance a run's stop judged its map error against (its summary: "mfr: E of T")."""
-    return float(re.search(r"mfr: [\d.]+ of ([\d.]+)", _stop(docs, day)["summary"])[1])
-
-
-def _dry_main_job(docs: Path) -> list[float]:
-    tol = _map_tolerance(docs, "2026-12-04")
-    metrics = _csv(_run(docs, "2026-12-04") / "surrogate_metrics.csv")
-    noise = metrics[(metrics["target"] == "mfr") & (metrics["model"] == "gp")]["noise_sd"].iloc[0]
-    mean_mfr = _stop(docs, "2026-12-04")["map_statistics"]["mfr"]["mean"]["value"]
-    return [tol, 100 * tol / mean_mfr, tol / noise]
-
-
-def _heldout_dry(docs: Path) -> list[float]:
-    mfr, pd_ = _heldout(docs, "run_2026-12-04/heldout", "mfr"), _heldout(docs, "run_2026-12-04/heldout", "pd")
-    runs = _csv(_run(docs, "2026-12-04") / "heldout" / "score.csv")["n_runs"].unique()
-    n = mfr["points"]
-    return [n, runs[0] if len(runs) == 1 else math.nan, mfr["rmse"], pd_["rmse"], _chi2_upper(mfr["rmse"], n),
-            _chi2_upper(pd_["rmse"], n), mfr["inside"], pd_["inside"], n]
-
-
-def _heldout_adhesive(docs: Path) -> list[float]:
-    s = _csv(_run(docs, "2026-12-06") / "heldout_reference" / "score.csv")
-    e = s[s["target"] == "mfr"]["error"]
-    rmse = math.sqrt(float((e ** 2).mean()))
-    return [len(e), e.mean(), e.std(ddof=1) / math.sqrt(len(e)), rmse, rmse / _map_tolerance(docs, "2026-12-06")]
-
-
-def _preset_row(docs: Path, preset: str) -> list[float]:
-    """CPU median / max, cost against `reference`, seed spread (RMS) and error of a 2026-12-02 preset."""
-    p = _preset(docs / "fidelity" / "presets.csv", preset)
-    return [p["cpu_s_median"], p["cpu_s_max"], p["cost_ratio_to_reference"],
-            *_seed_cv_rms(docs / "fidelity" / "per_point.csv", preset)]
-
-
-def _corrected_row(docs: Path, preset: str) -> list[float]:
-    c = docs / "fidelity" / "correction"
-    p = _preset(c / "presets.csv", preset)
-    return [p["cpu_s_median"], p["cpu_s_max"], *_seed_cv_rms(c / "per_point.csv", preset)]
-
-
-def _correction_study(docs: Path) -> list[float]:
-    pp = _csv(docs / "fidelity" / "correction" / "pairs.csv")
-    cases = _csv(docs / "fidelity" / "correction" / "cases.csv")
-    return [pp["h_over_d"].min(), pp["h_over_d"].max(), len(cases)]
-
-
-def _study(docs: Path) -> list[float]:
-    files = sorted((docs / "study").glob("cases_*.csv")) + sorted((docs / "study").glob("*_gap_seeds.csv"))
-    cases = pd.concat([_csv(f) for f in files]).drop_duplicates("case_id")
-    return [len(cases), cases["cpu_time"].sum() / 3600]
-
-
 def _stop(docs: Path, day: str) -> dict:
     return _json(_run(docs, day) / "stopped.json")
 
 
-MAIN_JOB = "docs/main_job/run_2026-12-04/"
-ADHESIVE = "docs/main_job/run_2026-12-06/"
-ADHESIVE_B = "docs/main_job/run_2026-12-06b/"
-FRONT_RUN = "2026-12-07e"  # the main job the README's front paragraph reports
-ADHESIVE_C = f"docs/main_job/run_{FRONT_RUN}/"
-SETUP_C = 47  # s, the set-up before the run's first job (the command at 18:16:43, the run's log from 18:17:30.1)
+SHIPPED = "2026-12-07e"  # the shipped run: the main job on the shipped scene and config, from a clean clone
+SHIPPED_RUN = f"docs/main_job/run_{SHIPPED}/"
+SETUP_S = 47  # s, the set-up before the run's first job (the command at 18:16:43, the run's log from 18:17:30.1)
+
+
+def _shipped_stop(docs: Path) -> list[float]:
+    """Cases, usable, CPU h measured and modelled, map error of MFR and PD at the stop, tolerance."""
+    s = _stop(docs, SHIPPED)
+    t = s["criteria"]["at_this_batch"]["map_error"]["targets"]
+    return [s["n"], s["usable"], s["cpu_hours"], s["cpu_hours_modelled"],
+            t["mfr"]["estimate"], t["pd"]["estimate"], t["mfr"]["tolerance"]]
+
+
+def _shipped_validation(docs: Path) -> list[float]:
+    """The map model's (GP) CV RMSE over one run's noise SD and its 95 % intervals' coverage, MFR and PD."""
+    m = _csv(_run(docs, SHIPPED) / "surrogate_metrics.csv")
+    g = m[m["model"] == "gp"].set_index("target")
+    return [g.loc["mfr", "rmse_over_noise"], g.loc["pd", "rmse_over_noise"], g.loc["mfr", "coverage"], g.loc["pd", "coverage"]]
+
+
+def _loop(docs: Path) -> list[float]:
+    """The config's loop: start, batch, tolerance (MFR; PD's must equal it), fewest stop cases, budget, CPU budget."""
+    c = _config(docs)["converge"]
+    tol = c["map_error"]["tolerance"]
+    if tol["mfr"] != tol["pd"]:
+        raise ValueError("the README states one tolerance for MFR and PD")
+    return [c["start"], c["batch"], tol["mfr"], c["min_stop_cases"], c["budget"], c["cpu_budget_h"]]
+
+
+def _run_ran_the_config(docs: Path, what: list[float]) -> list[float]:
+    """``what`` (numbers of the config's loop) if the shipped run's settings are the config's, else NaN."""
+    shipped, config = _stop(docs, SHIPPED)["settings"], _config(docs)["converge"]
+    same = all(shipped[k] == config[k] for k in ("start", "batch", "budget", "cpu_budget_h", "min_stop_cases", "map_error"))
+    return what if same else [math.nan] * len(what)
+
+
+def _bond(docs: Path) -> list[float]:
+    """The granular Bond number (DMT pull-off 4 pi gamma R*, R* = R/2 for equal spheres, over a sphere's
+    weight) at the smallest and the largest d of the config's range."""
+    c = _config(docs)
+    m, (lo, hi) = c["material"], (c["ranges"]["d_um"]["min"], c["ranges"]["d_um"]["max"])
+
+    def bond(d_um: float) -> float:
+        r = d_um * 1e-6 / 2
+        return 2 * math.pi * m["surface_energy_j_m2"] * r / (m["density_kg_m3"] * 4 / 3 * math.pi * r ** 3 * m["gravity_m_s2"])
+    return [lo, bond(lo), bond(hi), hi]
+
+
+def _bounds(docs: Path) -> list[float]:
+    d = _config(docs)["decisions"]
+    return [d["bounds"]["coverage"]["min"], d["bounds"]["thickness_ratio"]["min"], d["confidence"]]
+
+
+def _recommendation(docs: Path, powder: str, kind: str = "fastest") -> pd.Series:
+    r = _csv(_run(docs, SHIPPED) / "recommendations.csv")
+    return r[(r["powder"] == powder) & (r["kind"] == kind)].iloc[0]
+
+
+def _fine(docs: Path) -> list[float]:
+    """`fine`'s powder (f, d), its fastest setting's probability, h, v (beyond the data), the best within it."""
+    r = _recommendation(docs, "fine")
+    if not (r["status"] == "beyond_data_only" and bool(r["beyond_data"])):
+        return [math.nan] * 6
+    return [r["f_low"], r["d_um_low"], r["probability"], r["h_um"], r["v_mm_s"], r["best_probability_in_data"]]
 
 
 def _analyses_written(docs: Path) -> float:
-    """Minutes from the command to the last of the maps, decisions and explorer page (FRONT_RUN)."""
-    t = _csv(_run(docs, FRONT_RUN) / "timeline.csv")
-    return float(t[t["rule"].isin(["maps", "decide", "explorer"])]["end_min"].max()) + SETUP_C / 60
-
-
-def _window_5d_cost(docs: Path) -> list[float]:
-    """The 5 d window's run (run_2026-12-07d) against the 3 d window's (run_2026-12-07c_again), paired by
-    design point (the case id less its content key): the median over the pairs of the CPU ratio, and
-    the pairs."""
-    five = _csv(_run(docs, "2026-12-07d") / "cases.csv")
-    three = _csv(_run(docs, "2026-12-07c_again") / "cases.csv")
-    for t in (five, three):
-        t["point"] = t["case_id"].str.rsplit("-", n=1).str[0]
-    m = five.merge(three, on="point", suffixes=("", "_3d"))
-    return [float((m["cpu_time"] / m["cpu_time_3d"]).median()), len(m)]
+    """Minutes from the command to the last of the maps, decisions and explorer page (the shipped run)."""
+    t = _csv(_run(docs, SHIPPED) / "timeline.csv")
+    return float(t[t["rule"].isin(["maps", "decide", "explorer"])]["end_min"].max()) + SETUP_S / 60
 
 
 def _trend(docs: Path, day: str) -> list[float]:
@@ -325,31 +188,9 @@ def _trend(docs: Path, day: str) -> list[float]:
     return [float(z.mean()), float(z.std(ddof=1) / math.sqrt(len(z)))]
 
 
-def _window_5d_trend(docs: Path) -> list[float]:
-    """Mean flow-trend z (and its SE) of the 5 d window's run, and the 3 d window's mean."""
-    return [*_trend(docs, "2026-12-07d"), _trend(docs, "2026-12-07c")[0]]
-
-
-def _transient_fed(docs: Path) -> list[float]:
-    """The 5 d window with the transient fed (`window5_fed_transient`) against `shipped`, the
-    pre-registered seeds 1-2 paired by point and seed (``spreadmap.experiments.paired``): the
-    geometric mean CPU ratio and its 95 % t interval, the pairs; the largest point's MFR shift (mean
-    over its seeds) over `shipped`'s mean in %, its z against the cases' recorded SDs (eight points,
-    as the phrase says)."""
-    from spreadlab.experiments.paired import by_point, cpu_ratio, pairs
-
-    t = _csv(docs / "steady_window" / "transient_fed" / "cases.csv")
-    p = pairs(t[t["seed"].isin([1, 2])], "window5_fed_transient", "shipped")
-    points = by_point(p, "mfr")
-    if len(points) != 8:  # the phrase says "of eight"
-        raise ValueError(f"{len(points)} points paired, the README says eight")
-    worst = points.loc[points["z"].idxmax()]
-    return [*cpu_ratio(p), len(p), 100 * worst["diff"] / worst["base"], worst["z"]]
-
-
 def _exact_ci(k: int, n: int) -> tuple[float, float]:
     """The 95 % exact (Clopper-Pearson) interval of k successes in n, as the replay states it
-    (spreadmap.experiments.replay.honesty: scipy's binomtest)."""
+    (spreadlab.experiments.replay.honesty: scipy's binomtest)."""
     from scipy.stats import binomtest
 
     ci = binomtest(k, n).proportion_ci(0.95, method="exact")
@@ -357,38 +198,13 @@ def _exact_ci(k: int, n: int) -> tuple[float, float]:
 
 
 def _batch8_adhesive(docs: Path) -> list[float]:
-    import yaml
-
-    conv = yaml.safe_load((docs.parent / "config.yaml").read_text())["converge"]
+    conv = _config(docs)["converge"]
     st = _csv(docs / "replay" / "adhesive" / "batch8" / "stops.csv")
     st = st[(st["design"] == f"active_per_cpu_b{conv['batch']}") & (st["rule"] == "bare estimate")
             & (st["margin"].astype(float) == float(conv["map_error"]["margin"]))]
     stops = st[st["stopped"].astype(bool)]
     k, n = int(stops["true_within"].astype(bool).sum()), len(stops)
     return [conv["map_error"]["margin"], conv["batch"], conv["min_stop_cases"], k, n, len(st), *_exact_ci(k, n)]
-
-
-def _lever_pairs(docs: Path, table: str, arm: str):
-    """Session 32's A/Bs against `shipped` (docs/steady_window/window5_pile3): the pairs of one arm."""
-    from spreadlab.experiments.paired import pairs
-
-    return pairs(_csv(docs / "steady_window" / "window5_pile3" / table), arm, "shipped")
-
-
-def _reads2_lever(docs: Path) -> list[float]:
-    """The overlap read twice a contact: CPU ratio, its 95 % CI, the pairs."""
-    from spreadlab.experiments.paired import cpu_ratio
-
-    p = _lever_pairs(docs, "reads2_cases.csv", "reads2")
-    return [*cpu_ratio(p), len(p)]
-
-
-def _later_window_lever(docs: Path) -> list[float]:
-    """The later window on the pile of 3 d: CPU ratio, its 95 % CI, the pairs, MFR shift in % and its 90 % CI."""
-    from spreadlab.experiments.paired import cpu_ratio, relative_shift
-
-    p = _lever_pairs(docs, "cases.csv", "window5_pile3")
-    return [*cpu_ratio(p), len(p), *(100 * x for x in relative_shift(p, "mfr"))]
 
 
 def _replay_steady_window(docs: Path) -> list[float]:
@@ -398,194 +214,192 @@ def _replay_steady_window(docs: Path) -> list[float]:
     return [k, n, *_exact_ci(k, n)]
 
 
+def _arm_point_cpu_ratio(cases: pd.DataFrame, arm: str, base: str) -> pd.Series:
+    """Per point, the mean CPU of an arm's finished cases over the base arm's."""
+    m = cases[cases["status"] == "ok"].groupby(["arm", "point"])["cpu_time"].mean()
+    return m[arm] / m[base]
+
+
+def _adhesion_x1000_low(docs: Path) -> list[float]:
+    """Density x1000's MFR below density x10's, in %, at d 45 um (coarse) and d 15 um (fine): per point
+    (x10 - x1000) / x10 of the unflagged cases' mean MFR."""
+    a = _csv(docs / "adhesion" / "scaling_cases.csv")
+    ok = a[(a["status"] == "ok") & ~a["flagged"].astype(bool)]
+    mfr = ok.groupby(["arm", "point"])["mfr"].mean()
+    low = 100 * (mfr["adh_x10"] - mfr["adh_x1000"]) / mfr["adh_x10"]
+    return [low["coarse"], low["fine"]]
+
+
+def _machine_speed(docs: Path) -> list[float]:
+    """This machine's speed between days and within one (no table: the pages' prose): the same work's
+    time on the days before run c, its largest spread between the study's sessions, the same cases
+    70 min after the shipped run."""
+    mj, study = docs / "main_job" / "README.md", docs / "guide" / "08-study.md"
+    days = _prose(mj, "the same work took {}-{}x longer on the two days before")
+    again = _prose(mj, "to the bit, at **{}x the CPU**")
+    sessions = _prose(study, "speed differed by up to {}x between sessions")[0]
+    return [days[0], sessions, *days, sessions, *again, _prose(mj, "The same run again, {} min later")[0]]
+
+
+def _guide3_replays(docs: Path) -> list[float]:
+    """The shipped loop on the adhesive truth (stopped, replays, honest, stops, CI, median and p90 cases and
+    modelled CPU h) and on the shipped run's truth (honest, replays, CI, stops at 56 of them, CPU h median, p90)."""
+    conv = _config(docs)["converge"]
+    st = _csv(docs / "replay" / "adhesive" / "batch8" / "stops.csv")
+    st = st[(st["design"] == f"active_per_cpu_b{conv['batch']}") & (st["rule"] == "bare estimate")
+            & (st["margin"].astype(float) == float(conv["map_error"]["margin"]))]
+    a = st[st["stopped"].astype(bool)]
+    k = int(a["true_within"].astype(bool).sum())
+    sw = _csv(docs / "replay" / "adhesive" / "steady_window" / "stops_margin1.csv")
+    b = sw[sw["stopped"].astype(bool)]
+    kb = int(b["true_within"].astype(bool).sum())
+    return [len(a), len(st), k, len(a), *_exact_ci(k, len(a)), a["n"].median(), a["n"].quantile(0.9),
+            a["cpu_h"].median(), a["cpu_h"].quantile(0.9),
+            kb, len(sw), *_exact_ci(kb, len(b)), int((b["n"] == conv["min_stop_cases"]).sum()), len(sw),
+            conv["min_stop_cases"], b["cpu_h"].median(), b["cpu_h"].quantile(0.9)]
+
+
+def _powder(docs: Path, powder: str, kind: str = "fastest") -> list[float]:
+    """A powder's best setting in the shipped run: h, v, coverage and thickness / h (low, high over its range)."""
+    r = _recommendation(docs, powder, kind)
+    return [r["h_um"], r["v_mm_s"], r["coverage_mean_low"], r["coverage_mean_high"],
+            r["thickness_ratio_mean_low"], r["thickness_ratio_mean_high"]]
+
+
+def _below(value: float, bound: float) -> float:
+    """``bound`` when ``value`` is below it (a "below 0.001" claim), else NaN."""
+    return bound if value < bound else math.nan
+
+
+README = "README.md"
+GUIDE3, GUIDE5 = "docs/guide/03-convergence.md", "docs/guide/05-decisions.md"
+GUIDE_INDEX = "docs/guide/README.md"
+
 CLAIMS: list[Claim] = [
-    Claim("front figure: the dry main job's cases and CPU hours",
-          "({} cases to its map criteria, {} CPU hours",
-          MAIN_JOB + "stopped.json: n, cpu_hours",
-          lambda d: [_stop(d, "2026-12-04")["n"], _stop(d, "2026-12-04")["cpu_hours"]]),
-    Claim("front figure: the maps' MFR factor", "`reference` (MFR x{}; the layer fill",
-          "docs/fidelity/correction/correction.json: targets.mfr.factor",
-          lambda d: [_factor(d, "mfr")["factor"]]),
-    Claim("adhesive main job (batches of 8): cases, CPU h", "met its map criteria at {} cases ({} CPU h)",
-          ADHESIVE_C + "stopped.json: n, cpu_hours",
-          lambda d: [_stop(d, FRONT_RUN)["n"], _stop(d, FRONT_RUN)["cpu_hours"]]),
-    Claim("adhesive main job (batches of 8): minutes to the maps, decisions and explorer",
-          "explorer page **{} min** after the",
-          ADHESIVE_C + "timeline.csv: the last end_min of maps, decide, explorer + the set-up (47 s, the run's log)",
-          lambda d: [_analyses_written(d)]),
-    Claim("adhesive main job (batches of 8): the whole run's minutes", "the surrogate's validation last, {} min",
-          ADHESIVE_C + "timeline.json: wall_s / 60, + the set-up before the first job (47 s, the run's log)",
-          lambda d: [(_json(_run(d, FRONT_RUN) / "timeline.json")["wall_s"] + SETUP_C) / 60]),
-    Claim("adhesive main job (batches of 8): map error of MFR and PD at the stop, tolerance",
-          "map error MFR {} and PD {} against the {} tolerance",
-          ADHESIVE_C + "stopped.json: criteria.at_this_batch.map_error.targets.*.estimate, tolerance",
-          lambda d: (lambda t: [t["mfr"]["estimate"], t["pd"]["estimate"], t["mfr"]["tolerance"]])(
-              _stop(d, FRONT_RUN)["criteria"]["at_this_batch"]["map_error"]["targets"])),
-    Claim("the shipped loop's replay on the steady window's truth: honest stops, replays, 95 % CI",
-          "on the new scene's truth {} of {}, {}-{})",
-          "docs/replay/adhesive/steady_window/stops_margin1.csv: true_within, Clopper-Pearson", _replay_steady_window),
-    Claim("the front run: mean flow-trend z (SE)", "its cases' mean flow-trend z +{} (SE {})",
-          ADHESIVE_C + "cases.csv: flow_trend_z_batch, mean and SE", lambda d: _trend(d, FRONT_RUN)),
-    Claim("session 32: the overlap read twice a contact against four times (CPU, 95 % CI, pairs)",
-          "(two reads a contact) **{}x** that (95 % CI {}-{}, {} pairs, to the bit",
-          "docs/steady_window/window5_pile3/reads2_cases.csv: spreadmap.experiments.paired, reads2 against shipped",
-          _reads2_lever),
-    Claim("session 32: the later window on a 3 d pile (CPU, 95 % CI, pairs, MFR % and its 90 % CI)",
-          "3 d at **{}x** (95 % CI {}-{}, {} pairs; MFR +{} %, 90 % CI {} to +{};",
-          "docs/steady_window/window5_pile3/cases.csv: spreadmap.experiments.paired, window5_pile3 against shipped",
-          _later_window_lever),
-    Claim("the 5 d window: CPU per case paired with the 3 d window's run, pairs",
-          "at **{}x the CPU per case** ({} points paired)",
-          "docs/main_job/run_2026-12-07d/cases.csv, run_2026-12-07c_again/cases.csv: median cpu_time ratio "
-          "over the design points both ran",
-          _window_5d_cost),
-    Claim("the 5 d window: mean flow-trend z (SE) of its run, and the 3 d window's",
-          "mean flow-trend z +{}, SE {}, against +{})",
-          "docs/main_job/run_2026-12-07d/cases.csv, run_2026-12-07c/cases.csv: flow_trend_z_batch, mean and SE",
-          _window_5d_trend),
-    Claim("the 5 d window with the transient fed: CPU ratio (95 % CI), pairs; MFR at the worst point (of eight), z",
-          "at **{}x** (95 % CI {}-{}, {} pairs), but MFR {} % high at one point of eight (z {};",
-          "docs/steady_window/transient_fed/cases.csv (seeds 1-2): window5_fed_transient / shipped paired by point "
-          "and seed, geometric mean and t interval; per point mean MFR shift over shipped's, z from mfr_sd",
-          _transient_fed),
+    Claim("front figure: the Bond number at the range's smallest and largest d",
+          "Bond number {} at d = {} um to {} at {} um",
+          "config.yaml material (surface energy, density, gravity), ranges.d_um: 2 pi gamma R / (4/3 pi R^3 rho g)",
+          lambda d: (lambda b: [b[1], b[0], b[2], b[3]])(_bond(d))),
+    Claim("front figure: the machine map's powder point, surface energy, the preset's density scale",
+          "The machine map (f = {}, d = {} um) of the shipped run, [run_2026-12-07e](docs/main_job/README.md) "
+          "({} cases from a clean clone on 2026-12-07): **adhesive powder** (DMT, surface energy {}e-{} J/m^2,",
+          "config.yaml maps.machine f, d_um; material.surface_energy_j_m2 as mantissa and exponent; "
+          + SHIPPED_RUN + "stopped.json: n",
+          lambda d: (lambda c, e: [c["maps"]["machine"]["f"], c["maps"]["machine"]["d_um"], _stop(d, SHIPPED)["n"],
+                                   e / 10 ** round(math.log10(e)), -round(math.log10(e))])(
+              _config(d), _config(d)["material"]["surface_energy_j_m2"])),
+    Claim("front figure: the `default` preset's density scale", "at **fidelity `default`: density x{}, not corrected",
+          "config.yaml presets.default.density_scale; fidelity_correction applies to surface energy 0 only",
+          lambda d: [_config(d)["presets"]["default"]["density_scale"]
+                     if _config(d)["fidelity_correction"]["surface_energy_j_m2"] != _config(d)["material"]["surface_energy_j_m2"]
+                     else math.nan]),
+    Claim("the main job's loop (config converge:, as the shipped run ran it)",
+          "The main job runs {} LDS cases at the `default` preset, then batches of {} (half continuing the LDS "
+          "sequence, half where the map is least sure per CPU-second) until the map's own error is within {} "
+          "(MFR and PD, from {} cases on) or {} cases or {} modelled CPU hours",
+          "config.yaml converge: start, batch, map_error.tolerance, min_stop_cases, budget, cpu_budget_h; "
+          + SHIPPED_RUN + "stopped.json settings equal to them", lambda d: _run_ran_the_config(d, _loop(d))),
+    Claim("the shipped run: cases, usable, CPU h measured and modelled, map error MFR, PD, tolerance",
+          "criteria met at {} cases ({} usable, {} CPU h measured, {} modelled); map error MFR {} and PD {} "
+          "against the {} tolerance",
+          SHIPPED_RUN + "stopped.json: n, usable, cpu_hours, cpu_hours_modelled, "
+          "criteria.at_this_batch.map_error.targets.*.estimate, tolerance", _shipped_stop),
+    Claim("the shipped run's validation: CV RMSE over noise (MFR, PD), 95 % coverage (MFR, PD)",
+          "RMSE is {}x one run's noise SD for MFR and {}x for PD, its 95 % intervals cover {} and {}",
+          SHIPPED_RUN + "surrogate_metrics.csv (gp): rmse_over_noise, coverage", _shipped_validation),
+    Claim("the shipped run: mean flow-trend z (SE)", "mean flow-trend z is +{} (SE {})",
+          SHIPPED_RUN + "cases.csv: flow_trend_z_batch, mean and SE", lambda d: _trend(d, SHIPPED)),
     Claim("the adhesive replay of the shipped loop: margin, batch, fewest cases, stops honest, stops, replays, 95 % CI",
-          "(margin {}, batches of {}, stops from {} cases: {} of {} stops within the tolerance on {} replays, 95 % CI {}-{}",
+          "(no DEM; margin {}, batches of {}, stops from {} cases: {} of {} stops within the tolerance on {} "
+          "replays, 95 % CI {}-{}",
           "config.yaml converge; docs/replay/adhesive/batch8/stops.csv (design of the config's batch, bare "
-          "estimate at its margin): true_within, stopped rows, rows, Clopper-Pearson",
-          _batch8_adhesive),
-    Claim("adhesive map against `reference`: points, MFR bias (SE), RMS, RMS / tolerance",
-          "blind at {} new points run at `reference` (density x100), read MFR {} (SE {}) low, {} RMS, {}x",
-          ADHESIVE + "heldout_reference/score.csv (target mfr): rows, mean and SE of error, RMS of error, / the tolerance",
-          _heldout_adhesive),
-    Claim("adhesive noise law: points, dof, its SD over the dry law's at h/d 1.1, 2, 4-6 (MFR and PD)",
-          "({} points, {} dof: the noise {}-{}x the dry law's at h/d 1.1, {}-{}x at 2, {}-{}x at 4-6",
-          "docs/noise/adhesive/law.json: points, dof, targets.*.factor_over_dry[chosen] (min-max over MFR, PD)",
-          _noise_adhesive),
-    Claim("dry main job: tolerance, as % of the map's mean MFR, over one run's noise (the noise law's)",
-          "**MFR and PD within {} RMS** (about {} % of the mean MFR, {}x",
-          MAIN_JOB + "stopped.json map_statistics.mfr.mean; surrogate_metrics.csv noise_sd (gp, mfr: RMS of "
-          "the cases' SDs, which the noise law sets)",
-          _dry_main_job),
-    Claim("the stop rule on held-out replays: replays, stops within tolerance, stops, 95 % CI",
-          "(on {} replays its margin was not calibrated on, {} of {} stops within tolerance, 95 % CI {}-{})",
-          "docs/replay/heldout50/honesty.csv (x1.7, 0.02, active_per_cpu): replays, within, stops, honest_low/high",
-          lambda d: (lambda r: [r["replays"], r["within"], r["stops"], r["honest_low"], r["honest_high"]])(
-              _replay_row(d / "replay" / "heldout50" / "honesty.csv"))),
-    Claim("the loop's start, batch and CPU budget",
-          "adaptive loop: {} LDS cases, then batches of {} until the map's error holds or {} modelled CPU",
-          MAIN_JOB + "stopped.json: settings start, batch, cpu_budget_h",
-          lambda d: [_stop(d, "2026-12-04")["settings"][k] for k in ("start", "batch", "cpu_budget_h")]),
-    Claim("the maps' correction factors and the factor's SD at a new point",
-          "(x{} MFR, x{} PD; its uncertainty, {} % at a point no pair ran",
-          "docs/fidelity/correction/correction.json: targets.mfr/pd.factor, targets.mfr.sd",
-          lambda d: [_factor(d, "mfr")["factor"], _factor(d, "pd")["factor"], 100 * _factor(d, "mfr")["sd"]]),
-    Claim("rough / flat MFR: median at h/d >= 5; the bands' medians and the points' range at h/d < 2",
-          "median by band: {}x at h/d >= 5 up to {}-{}x at h/d < 2, {}-{}x by point there;",
-          "docs/floors/compare/by_band.csv (mfr): ratio_median, ratio_min, ratio_max by band",
-          _floors),
-    Claim("dry main job: set-up, stop and end minutes (no table: the page's prose)",
-          "set-up {} s, then **the loop met its criteria at {} cases after {} min** and the maps",
-          "docs/main_job/README.md prose ('Set-up 55 s', 'criteria met at 96 cases, 52 min'); stopped.json n",
-          lambda d: [_prose(d / "main_job" / "README.md", "**Set-up {} s**")[0], _stop(d, "2026-12-04")["n"],
-                     _prose(d / "main_job" / "README.md", "criteria met at {} cases, {} min after set-up")[1]]),
-    Claim("dry main job: end of the analyses (no table: the page's prose)",
-          "explorer page were written at **{} min**",
-          "docs/main_job/README.md prose ('end at **57 min**')",
-          lambda d: _prose(d / "main_job" / "README.md", "explorer) end at **{} min**")),
-    Claim("dry main job: CPU h measured, modelled, cases neither flagged nor failed",
-          "{} CPU hours measured ({} modelled), none of the {} cases flagged or failed",
-          MAIN_JOB + "stopped.json cpu_hours, cpu_hours_modelled; cases.csv usable (spreadmap.run_report)",
-          lambda d: [_stop(d, "2026-12-04")["cpu_hours"], _stop(d, "2026-12-04")["cpu_hours_modelled"],
-                     set_summary(_csv(_run(d, "2026-12-04") / "cases.csv"))["usable"]]),
-    Claim("dry map's blind check: points, seeds, RMS MFR / PD, upper bounds, inside",
-          "checked blind at {} new points ({} seeds each, predictions committed before the runs): RMS error {} MFR, "
-          "{} PD with the runs' noise in it (95 % upper bounds {}, {}), {} and {} of {} inside",
-          MAIN_JOB + "heldout/score.json: points, rmse, inside; score.csv n_runs; bound rmse sqrt(n / chi2_0.05(n))",
-          _heldout_dry),
-    Claim("dry main job: the CPU share of its corner cases",
-          "at d 10-12 um and h/d 6-7 take {} % of the CPU",
-          MAIN_JOB + "cases.csv: the cpu_time share of the (three) cases at d <= 12.5 um, h/d >= 5.5",
-          _cpu_share_of_corner_cases),
-    Claim("this machine against the cost law's median machine, 2026-12-04 and the fed A/B (prose)",
-          "this machine runs {}-{}x slower than the cost law's median machine",
-          MAIN_JOB + "stopped.json cpu_hours / cpu_hours_modelled; docs/case_cost/README.md prose ('ran 2.1x "
-          "slower than the law's median machine')",
-          lambda d: [_stop(d, "2026-12-04")["cpu_hours"] / _stop(d, "2026-12-04")["cpu_hours_modelled"],
-                     _prose(d / "case_cost" / "README.md", "this machine ran {}x slower than the law's")[0]]),
-    Claim("fidelity correction study: h/d range, cases", "points at h/d {}-{}, two seeds, {} cases",
-          "docs/fidelity/correction/pairs.csv h_over_d; cases.csv rows", _correction_study),
-    Claim("`smoke` row (2026-12-02)",
-          "| `smoke` | {} s / {} s (2026-12-02: {}x cheaper than `reference` then) | {} % / {} % | MFR and PD {}-{} %",
-          "docs/fidelity/presets.csv (smoke): cpu_s_median, cpu_s_max, cost_ratio_to_reference, "
-          "mfr/pd_mean_abs_rel_error; per_point.csv: RMS of the seed CV",
-          lambda d: [*_preset_row(d, "smoke"),
-                     *(100 * _preset(d / "fidelity" / "presets.csv", "smoke")[[
-                         "mfr_mean_abs_rel_error", "pd_mean_abs_rel_error"]].to_numpy(float))]),
-    Claim("`fast` row (2026-12-02)",
-          "| `fast` | {} s / {} s (2026-12-02: {}x cheaper then) | {} % / {} % | MFR {} % low",
-          "docs/fidelity/presets.csv (fast); per_point.csv: RMS of the seed CV",
-          lambda d: [*_preset_row(d, "fast"),
-                     100 * _preset(d / "fidelity" / "presets.csv", "fast")["mfr_mean_abs_rel_error"]]),
-    Claim("`default` row (2026-12-04)",
-          "| `default` | **{} s / {} s** ({}x cheaper than `reference`) | {} % / {} % | **x{} ({}-{}) / x{} ({}-{})**",
-          "docs/fidelity/correction/presets.csv (default): cpu_s_median/max; correction.json cpu_ratio, "
-          "factor, mean_95; per_point.csv: RMS of the seed CV",
-          lambda d: (lambda r: [r[0], r[1], _json(d / "fidelity" / "correction" / "correction.json")["cpu_ratio"],
-                                r[2], r[3], _factor(d, "mfr")["factor"], *_factor(d, "mfr")["mean_95"],
-                                _factor(d, "pd")["factor"], *_factor(d, "pd")["mean_95"]])(
-              _corrected_row(d, "default"))),
-    Claim("`reference` row (2026-12-04)", "| `reference` | {} s / {} s | {} % / {} % ({} seeds)",
-          "docs/fidelity/correction/presets.csv (reference); per_point.csv: RMS of the seed CV, cases per point",
-          lambda d: [*_corrected_row(d, "reference"),
-                     _csv(d / "fidelity" / "correction" / "per_point.csv")["cases"].max()]),
-    Claim("adhesion: CPU against dry; x1000 below x10 (coarse, fine); x100 below x10; CPU of x100, x10",
-          "costs **{}x** the dry scene's (median {} s against {} s, max {} s against {} s). Density scaling is no "
-          "longer free: with the surface energy scaled to keep the Bond number, x1000 reads MFR **{} % (d 45 um) to "
-          "{} % (d 15 um) below density x10** (x100: {}-{} %, {}x the CPU of x1000; x10: {}x)",
-          "docs/adhesion/scaling_cases.csv: geometric mean over points of the arms' mean CPU ratio; median/max "
-          "cpu_time; per point (x10 - arm) / x10 of the mean MFR",
-          _adhesion),
-    Claim("size distribution: CPU against one size (D5-D95, D1-D99)",
-          "costs **{}x (D50 45 um) to {}x (15 um)** the one-size case (median {} s against {} s, max {} s "
-          "against {} s); cut at D1-D99, {}-{}x",
-          "docs/size_distribution/cost_cases.csv: per point mean cpu_time ratio; median/max cpu_time",
-          _size_distribution),
-    Claim("overlap read every second step: CPU ratio, CI, pairs",
-          "**{}x the CPU per case** (95 % CI {}-{}; {} pairs",
-          "docs/case_cost/overlap_stride.csv: geometric mean of stride / every_step cpu_time, normal 95 %",
-          _overlap_stride),
-    Claim("a smaller heap: CPU at the wide point and the corner, MFR shift at the corner",
-          "a heap of 3 h^2 ({}-{}x the CPU, MFR +{}, SE {}, at h/d {})",
-          "docs/heap_size/cases.csv (rough, finished): median cpu_time 3 / 4.7 h^2 at the corner and the wide point; "
-          "corner mean MFR 3 - 4.7 h^2",
-          _heap_size),
-    Claim("issue 31's benchmark: CPU at the seven points, the corner, over the box",
-          "costs {}x the CPU at the seven points ({}-{}), {}x at the corner ({}-{}), **{}x over the box** ({}-{})",
-          "docs/case_cost/final_summary.md, final_corner_summary.md (1 / arm-over-shipped); cost_map.json mean_ratio",
-          _issue31),
-    Claim("`default` per case over the box (cost law, this machine) and in the dry main job",
-          "median {} s, max {} s (max / median {}; the main job of 2026-12-04: {} s, {} s, {})",
-          "docs/case_cost/cost_map.json (shipped, default, this machine): median, max, max_over_median; "
-          + MAIN_JOB + "cases.csv cpu_time median, max",
-          _cost_map_default),
-    Claim("the published study: distinct cases, CPU hours", "the maps that converged ({} cases, {} CPU hours)",
-          "docs/study/cases_*.csv and *_gap_seeds.csv: distinct case_id, sum of cpu_time / 3600", _study),
-    Claim("issue 31's benchmark: MFR shift's chi-square", "MFR reads higher (chi-square {} over {} points, p {})",
-          "docs/case_cost/final_summary.md: issue31_start MFR chi-square line", _issue31_mfr),
+          "estimate at its margin): true_within, stopped rows, rows, Clopper-Pearson", _batch8_adhesive),
+    Claim("the shipped loop's replay on the shipped scene's truth: honest stops, replays, 95 % CI",
+          "on the shipped scene's truth {} of {}, {}-{};",
+          "docs/replay/adhesive/steady_window/stops_margin1.csv: true_within, Clopper-Pearson", _replay_steady_window),
+    Claim("the shipped layer bounds and confidence", "(coverage >= {}, thickness >= {} h) with P >= {}",
+          "config.yaml decisions: bounds.coverage.min, bounds.thickness_ratio.min, confidence", _bounds),
+    Claim("the shipped run's recommendation for `fine`: powder, P beyond the data at (h, v), best within",
+          "`fine` (f {}, d {} um) reaches P {} only beyond the data (h {} um, v {} mm/s), {} at best within it",
+          SHIPPED_RUN + "recommendations.csv (fine, fastest; status beyond_data_only): f_low, d_um_low, "
+          "probability, h_um, v_mm_s, best_probability_in_data", _fine),
+    Claim("the shipped run: minutes to the maps, decisions and explorer; the set-up in it",
+          "explorer page **{} min** after it started (set-up {} s included)",
+          SHIPPED_RUN + "timeline.csv: the last end_min of maps, decide, explorer + the set-up (47 s, the run's log)",
+          lambda d: [_analyses_written(d), SETUP_S]),
+    Claim("the shipped run: the whole run's minutes", "the surrogate's validation last, took {} min",
+          SHIPPED_RUN + "timeline.json: wall_s / 60, + the set-up before the first job (47 s, the run's log)",
+          lambda d: [(_json(_run(d, SHIPPED) / "timeline.json")["wall_s"] + SETUP_S) / 60]),
+    Claim("this machine's speed between days and within one (no table: the pages' prose)",
+          "This machine's speed moves {}-{}x between days (the same cases took {}-{}x longer on two other days, "
+          "up to {}x between the study's sessions; the shipped run's cases ran at {}x the CPU only {} min later",
+          "docs/main_job/README.md prose (run c: 'took 1.3-1.5x longer on the two days before'; the same run "
+          "again: '1.29x the CPU', '70 min later'); docs/guide/08-study.md prose ('up to 2x between sessions')",
+          _machine_speed),
+    Claim("density x1000 against x10: MFR low at d 45 um and d 15 um",
+          "at density x1000 MFR reads {} % (d 45 um) to {} % (d 15 um) below density x10",
+          "docs/adhesion/scaling_cases.csv: per point (x10 - x1000) / x10 of the mean MFR", _adhesion_x1000_low),
+    Claim("guide 3: the main job's loop (config converge:)",
+          "(`converge:`): {} LDS cases at the `default` preset, then batches of {}, half continuing the LDS "
+          "sequence and half where the map is least sure per planned CPU-second, until **the map's own error "
+          "is within {} (MFR and PD)**, judged from {} cases on, or the budget is spent ({} cases or **{} "
+          "modelled CPU hours**)",
+          "config.yaml converge (the shipped run's settings equal to them)", lambda d: _run_ran_the_config(d, _loop(d)),
+          GUIDE3),
+    Claim("guide 3: the shipped run's stop", "density x{}) stopped at {} cases, its map error MFR {} and PD {}.",
+          "config.yaml presets.default.density_scale; " + SHIPPED_RUN + "stopped.json",
+          lambda d: [_config(d)["presets"]["default"]["density_scale"], *(lambda x: [x[0], x[4], x[5]])(_shipped_stop(d))],
+          GUIDE3),
+    Claim("guide 3: the shipped loop's replays (adhesive truth; the shipped run's truth)",
+          "{} of {} replays stopped, **{} of {} within 0.02 (95 % CI {}-{})**, at {} cases (median; p90 {}) and {} "
+          "modelled CPU h (p90 {}). On a truth fitted on the shipped run's usable cases (run_2026-12-07e, the "
+          "shipped scene; pre-registered, no seed chose the rule): **{} of {} within 0.02 (95 % CI {}-{})**, {} of "
+          "{} at {} cases, {} modelled CPU h (median; p90 {})",
+          "docs/replay/adhesive/batch8/stops.csv (the config's design and margin), "
+          "docs/replay/adhesive/steady_window/stops_margin1.csv: stopped, true_within, n, cpu_h; Clopper-Pearson",
+          _guide3_replays, GUIDE3),
+    Claim("guide 3: the shipped run's minutes to its maps, the same cases' CPU 70 min later",
+          "wrote its maps {} min after the command on this machine; the same cases ran at {}x the CPU {} min later",
+          SHIPPED_RUN + "timeline.csv (+ the set-up); docs/main_job/README.md prose",
+          lambda d: [_analyses_written(d), *_machine_speed(d)[5:]], GUIDE3),
+    Claim("guide 5: the bounds and confidence", "with the shipped bounds (coverage >= {}, layer thickness >= {} h) at {} %",
+          "config.yaml decisions", lambda d: (lambda b: [b[0], b[1], 100 * b[2]])(_bounds(d)), GUIDE5),
+    Claim("guide 5: `fine` in the shipped run",
+          "`fine` (f {}, d {} um): at best P {} within the data; only beyond it does a setting reach P {}, the "
+          "fastest h {} um, v {} mm/s (coverage {}, thickness {} h)",
+          SHIPPED_RUN + "recommendations.csv (fine, fastest)",
+          lambda d: (lambda f, p: [f[0], f[1], f[5], f[2], f[3], f[4], p[2], p[4]])(_fine(d), _powder(d, "fine")), GUIDE5),
+    Claim("guide 5: `medium_range` in the shipped run",
+          "`medium_range` (f {}-{}, d {}-{} um, the whole range): P below {} everywhere in the data; at its best "
+          "setting, h {} um, v {} mm/s, coverage {}-{} and thickness {}-{} h",
+          SHIPPED_RUN + "recommendations.csv (medium_range): f, d range, best_probability_in_data, h, v, coverage, thickness",
+          lambda d: (lambda r, p: [r["f_low"], r["f_high"], r["d_um_low"], r["d_um_high"],
+                                   _below(r["best_probability_in_data"], 0.001), *p])(
+              _recommendation(d, "medium_range"), _powder(d, "medium_range")), GUIDE5),
+    Claim("guide 5: `coarse` in the shipped run",
+          "`coarse` (f {}, d {} um): P below {}; at its best, h {} um, v {} mm/s, coverage {} and thickness {} h",
+          SHIPPED_RUN + "recommendations.csv (coarse)",
+          lambda d: (lambda r, p: [r["f_low"], r["d_um_low"], _below(r["best_probability_in_data"], 0.001),
+                                   p[0], p[1], p[2], p[4]])(_recommendation(d, "coarse"), _powder(d, "coarse")), GUIDE5),
+    Claim("guide 5: density x1000 against x10", "MFR reads {}-{} % below density x10",
+          "docs/adhesion/scaling_cases.csv", _adhesion_x1000_low, GUIDE5),
+    Claim("guide index: the shipped run", "rough floor; {} cases, maps at {} min)",
+          SHIPPED_RUN + "stopped.json n; timeline.csv (+ the set-up)",
+          lambda d: [_stop(d, SHIPPED)["n"], _analyses_written(d)], GUIDE_INDEX),
 ]
 
 
-def check(readme: str, docs: Path, claims: Sequence[Claim] = CLAIMS) -> list[Row]:
-    """Every claim's numbers as README states them against the numbers derived from docs/.
+def check(readme: str, docs: Path, claims: Sequence[Claim] | None = None) -> list[Row]:
+    """Every claim's numbers as one page states them against the numbers derived from docs/.
 
     Parameters
     ----------
     readme : str
-        README.md's text.
+        The page's text (README.md's by default).
     docs : pathlib.Path
-        The published results' folder (the repository's docs/).
+        The published results' folder (the repository's docs/; the config beside it).
     claims : sequence of Claim, optional
-        The claims to check (default: all of README's that a table holds).
+        The claims to check (default: README.md's of ``CLAIMS``).
 
     Returns
     -------
@@ -594,6 +408,7 @@ def check(readme: str, docs: Path, claims: Sequence[Claim] = CLAIMS) -> list[Row
         (within ``tolerance(stated)``), "MISMATCH" when not, "NOT FOUND" (one row per claim) when
         README no longer has the phrase.
     """
+    claims = [c for c in CLAIMS if c.page == README] if claims is None else claims
     text = " ".join(readme.split())
     rows = []
     for claim in claims:
@@ -607,6 +422,34 @@ def check(readme: str, docs: Path, claims: Sequence[Claim] = CLAIMS) -> list[Row
             ok = math.isfinite(value) and abs(value - float(stated)) <= tol
             label = claim.label if len(derived) == 1 else f"{claim.label} [{i + 1}]"
             rows.append(Row(label, stated, value, tol, "ok" if ok else "MISMATCH", claim.source))
+    return rows
+
+
+def check_pages(root: Path, docs: Path | None = None, claims: Sequence[Claim] = CLAIMS) -> list[Row]:
+    """Every claim against its own page under ``root`` (README.md, the guide's pages).
+
+    Parameters
+    ----------
+    root : pathlib.Path
+        The repository (its pages and its docs/).
+    docs : pathlib.Path, optional
+        The published results' folder (default ``root / "docs"``).
+    claims : sequence of Claim, optional
+        The claims to check (default: all).
+
+    Returns
+    -------
+    list of Row
+        ``check``'s rows page by page, README.md's first; a guide page's labels start with its name.
+    """
+    docs = root / "docs" if docs is None else docs
+    pages = sorted({c.page for c in claims}, key=lambda p: (p != README, p))
+    rows = []
+    for page in pages:
+        mine = [c for c in claims if c.page == page]
+        if page != README:
+            mine = [Claim(f"{Path(page).stem}: {c.label}", c.phrase, c.source, c.derive, c.page) for c in mine]
+        rows += check((root / page).read_text(), docs, mine)
     return rows
 
 

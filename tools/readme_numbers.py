@@ -1,9 +1,11 @@
-"""Re-derive the numbers README.md states from the published tables under docs/ and print each
-beside what README says; exits 1 when one does not round to README's or is no longer found.
+"""Re-derive the numbers README.md (and the guide's pages, where they state what is current) state
+from the published tables under docs/ and print each beside what the page says; exits 1 when one
+does not round to the page's or is no longer found.
 
-    .venv/bin/python tools/readme_numbers.py [--readme README.md] [--docs docs]
+    .venv/bin/python tools/readme_numbers.py [--root .] [--docs docs]
 
-The claims, their sources and the tolerance (README's rounding): spreadlab/readme_numbers.py.
+The claims, their pages, their sources and the tolerance (the page's rounding):
+spreadlab/readme_numbers.py.
 """
 from __future__ import annotations
 
@@ -11,17 +13,17 @@ import argparse
 import sys
 from pathlib import Path
 
-from spreadlab.readme_numbers import check, report_text
+from spreadlab.readme_numbers import check_pages, report_text
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--readme", type=Path, default=ROOT / "README.md")
-    parser.add_argument("--docs", type=Path, default=ROOT / "docs")
+    parser.add_argument("--root", type=Path, default=ROOT, help="the repository: README.md and docs/guide/")
+    parser.add_argument("--docs", type=Path, default=None, help="the published tables (default ROOT/docs)")
     args = parser.parse_args(argv)
-    rows = check(args.readme.read_text(), args.docs)
+    rows = check_pages(args.root, args.docs)
     sys.stdout.write(report_text(rows))
     return 0 if all(r.status == "ok" for r in rows) else 1
 
