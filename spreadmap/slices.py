@@ -37,7 +37,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 
 from . import design
 from .design import Design
@@ -190,7 +189,7 @@ class Slice:
             out[n] = axis_values(given.get(n), size, n, ranges, span)
         return out
 
-    def frame(self, axes: Mapping, fixed=None, ranges=None) -> pd.DataFrame:
+    def frame(self, axes: Mapping, fixed=None, ranges=None):
         """The slice's points: every pair of the varying axes' values, each with every fixed point.
 
         Parameters
@@ -208,6 +207,8 @@ class Slice:
         pandas.DataFrame
             Columns ``NAMES``; the first varying axis slowest, then the second, then the fixed points.
         """
+        import pandas as pd  # here: the config's checks import this module on every workflow start
+
         mesh = np.meshgrid(*[np.atleast_1d(np.asarray(axes[n], float)) for n in self.varying], indexing="ij")
         pairs = np.column_stack([m.ravel() for m in mesh])
         if isinstance(fixed, pd.DataFrame):
@@ -244,7 +245,7 @@ class Slice:
         space = Design.of(ranges if ranges is not None else (config or {}).get("ranges"))
         return self.frame(self.axes(section, space, sizes), self.fixed(section, space), space).to_numpy(float)
 
-    def fixed_of(self, frame: pd.DataFrame) -> dict[str, float]:
+    def fixed_of(self, frame) -> dict[str, float]:
         """The fixed axes' values of a slice's table (its first row), e.g. a map's CSV read back."""
         return {n: float(frame[n].iloc[0]) for n in self.fixed_axes() if n in frame}
 
