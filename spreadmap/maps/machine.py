@@ -190,11 +190,11 @@ def draw_machine_map(grid, stem, y, support, max_labels=7, y_note=None, floor=No
     placed = []
     for j in range(len(v)):
         if j in v_lab:
-            end_label(ax, X[:, j], Y[:, j], f"v = {fmt(v[j])} mm/s", edge=mcolors.to_hex(cmap(vnorm(v[j]))),
+            end_label(ax, X[:, j], Y[:, j], BY_NAME["v_mm_s"].text(v[j]), edge=mcolors.to_hex(cmap(vnorm(v[j]))),
                       placed=placed)
     for i in range(len(h)):
         if i in h_lab:
-            end_label(ax, X[i], Y[i], f"h = {fmt(h[i])} um", colour="0.1", edge="0.3", placed=placed)
+            end_label(ax, X[i], Y[i], BY_NAME["h_um"].text(h[i]), colour="0.1", edge="0.3", placed=placed)
     handles = [Line2D([], [], color=cmap(0.6), lw=2.2, label="constant blade speed v (solid)"),
                Line2D([], [], color="0.15", lw=1.3, ls="--", label="constant layer thickness h (dashed)"),
                Line2D([], [], marker="o", ls="", color="0.5", alpha=0.4, ms=9, label="± one model SD (ellipse)"),

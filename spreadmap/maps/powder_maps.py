@@ -151,7 +151,7 @@ def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor
             ax.set_ylim(lo, hi)
         ax.set_ylabel(axis_label(t))
         ax.set_xlim(d.min(), d.max() + 0.2 * np.ptp(d))
-        right_labels(ax, d[-1], z[:, -1], [f"f = {fmt(x)}" for x in fv], fcol)
+        right_labels(ax, d[-1], z[:, -1], [BY_NAME["f"].text(x) for x in fv], fcol)
         ax.set_title(f"{short(t)} against particle diameter; shaded: 95 % band of the mean "
                      f"(f = {fmt(fv[0])}, {fmt(fv[-1])})", fontsize=9)
         ax.grid(alpha=0.3)
@@ -261,7 +261,7 @@ def draw_powder_cluster_map(grid: pd.DataFrame, stem, y: str, support: dict, flo
         ax.scatter(X[ok[:, j], j], Y[ok[:, j], j], s=sizes[ok[:, j]], color=c, edgecolor="black", lw=0.4, zorder=3)
         ax.scatter(X[~ok[:, j], j], Y[~ok[:, j], j], s=sizes[~ok[:, j]], facecolor="white", edgecolor=c, lw=1.2,
                    zorder=3)
-        end_label(ax, X[:, j], Y[:, j], f"d = {fmt(d[j])} um", at="start", fontsize=9, distance=10,
+        end_label(ax, X[:, j], Y[:, j], BY_NAME["d_um"].text(d[j]), at="start", fontsize=9, distance=10,
                   edge=mcolors.to_hex(c), placed=placed)
     handles = [Line2D([], [], marker="o", ls="-", color="0.5", mec="black", ms=5,
                       label=f"{len(fv)} friction values {fmt(fv[0])}-{fmt(fv[-1])}, marker size grows with f"),

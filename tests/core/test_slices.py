@@ -191,8 +191,9 @@ def test_a_toy_axis_registered_once_reaches_the_slices_the_sample_and_the_maps(t
 # ------------------------------------------------------------------------------------------------
 AXIS_FILES = {
     "spreadmap/design.py": "the axis: a Parameter (name, symbol, label, default range, unit, nominal)",
-    "schemas/config.schema.yaml": "its `ranges` entry (the schema refuses a range it does not name); a slice "
-                                  "holding it at another value than the nominal names it in that slice's section",
+    "schemas/config.schema.yaml": "its `ranges` entry and its key of a chosen point (`definitions.point`): the "
+                                  "schema refuses names it does not know; a slice holding it at another value than "
+                                  "the nominal names it in that slice's section",
     "spreadmap/case/scene.py": "its value into the scene's parameters, in the simulation's units",
     "spreadmap/case/identity.py": "its digits and its place in the readable case id",
     "yade_scripts/spreading_case.py": "the physics: what the simulation does with it",
@@ -230,7 +231,7 @@ def test_a_new_axis_touches_at_most_five_files():
     """A fifth design axis touches five files:
 
     1. spreadmap/design.py -- the axis: a Parameter (name, symbol, label, default range, unit, nominal);
-    2. schemas/config.schema.yaml -- its ``ranges`` entry;
+    2. schemas/config.schema.yaml -- its ``ranges`` entry and its key of a chosen point;
     3. spreadmap/case/scene.py -- its value into the scene's parameters;
     4. spreadmap/case/identity.py -- its digits and its place in the case id;
     5. yade_scripts/spreading_case.py -- the physics.
@@ -240,7 +241,7 @@ def test_a_new_axis_touches_at_most_five_files():
     Python file of the package, the scripts or the tools spells out the axes together (a tuple or
     dict of three or more of their names, a call or function with arguments named after them, an
     f-string reading them by name), but for the files of the refactors running beside this one
-    (``ELSEWHERE``); the schema's ranges name the registry's axes; docs/guide/06-workflow.md's
+    (``ELSEWHERE``); the schema's ranges and chosen point name the registry's axes; docs/guide/06-workflow.md's
     recipe names the same five files. (config.yaml need not change: a range it leaves out is the
     registry's default.)"""
     assert len(AXIS_FILES) <= 5 and all((ROOT / f).is_file() for f in AXIS_FILES)
@@ -249,6 +250,8 @@ def test_a_new_axis_touches_at_most_five_files():
     assert set(found) - ELSEWHERE <= set(AXIS_FILES), {k: v for k, v in found.items() if k not in AXIS_FILES}
     schema = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())["properties"]
     assert list(schema["ranges"]["properties"]) == list(design.NAMES)
+    point = yaml.safe_load((ROOT / "schemas" / "config.schema.yaml").read_text())["definitions"]["point"]
+    assert point["required"] == list(design.NAMES) == [k for k in point["properties"] if k not in ("preset", "seed")]
     recipe = (ROOT / "docs" / "guide" / "06-workflow.md").read_text().split("### Adding a design axis")[1]
     recipe = recipe.split("\n## ")[0].split("\n### ")[0]
     assert set(re.findall(r"`([\w/.-]+\.(?:py|yaml))`", recipe)) >= set(AXIS_FILES)
