@@ -28,6 +28,26 @@ from .targets import names as target_names
 
 @dataclass(frozen=True)
 class Parameter:
+    """One design axis: its names, its default range and unit, and where a slice holds it.
+
+    Parameters
+    ----------
+    name : str
+        Its column name in every table (and its config key).
+    symbol : str
+        The symbol the maps write (``v`` in ``v = 6.1 mm/s``); ``n_<symbol>`` is its grid size's
+        config key.
+    label : str
+        Its axis label, with its unit, for figures.
+    low, high : float
+        Its default range, in its unit (config ``ranges`` overrides it).
+    unit : str
+        Its unit (``-`` for none).
+    nominal : float or None, optional
+        Its value where a slice holds it fixed and the config names none; None: the middle of its
+        range.
+    """
+
     name: str  # column name in every table
     symbol: str
     label: str  # axis label with unit, for figures

@@ -82,7 +82,18 @@ def axis_values(given, n: int, name: str, ranges=None, span=None) -> np.ndarray:
 
 
 def size_key(name: str) -> str:
-    """The config key of an axis's grid size: ``n_`` and its symbol (``n_h`` for ``h_um``)."""
+    """The config key of an axis's grid size.
+
+    Parameters
+    ----------
+    name : str
+        The parameter (one of ``spreadmap.design.NAMES``).
+
+    Returns
+    -------
+    str
+        ``n_`` and its symbol (``n_h`` for ``h_um``).
+    """
     return f"n_{design.BY_NAME[name].symbol}"
 
 
@@ -110,7 +121,13 @@ class Slice:
     sizes: dict = field(default_factory=dict)
 
     def fixed_axes(self) -> tuple[str, ...]:
-        """The axes held fixed: every parameter of ``NAMES`` (read now) but the varying two."""
+        """The axes held fixed.
+
+        Returns
+        -------
+        tuple of str
+            Every parameter of ``NAMES`` (read when called) but the varying two, in ``NAMES`` order.
+        """
         return tuple(n for n in design.NAMES if n not in self.varying)
 
     def settings(self, config: Mapping | None = None) -> dict:
@@ -133,7 +150,20 @@ class Slice:
         return checked(self.section, part)
 
     def size(self, name: str, section: Mapping | None = None) -> int:
-        """The grid size of a varying axis: the section's ``n_<symbol>``, else the slice's default."""
+        """The grid size of a varying axis.
+
+        Parameters
+        ----------
+        name : str
+            The varying axis.
+        section : Mapping or None, optional
+            The slice's config section (``settings``); None: the slice's default alone.
+
+        Returns
+        -------
+        int
+            The section's ``n_<symbol>``, else the slice's default (``sizes``).
+        """
         key = size_key(name)
         if section is not None and key in section:
             return int(section[key])
@@ -246,12 +276,36 @@ class Slice:
         return self.frame(self.axes(section, space, sizes), self.fixed(section, space), space).to_numpy(float)
 
     def fixed_of(self, frame) -> dict[str, float]:
-        """The fixed axes' values of a slice's table (its first row), e.g. a map's CSV read back."""
+        """The fixed axes' values of a slice's table, e.g. a map's CSV read back (its titles read them so).
+
+        Parameters
+        ----------
+        frame : pandas.DataFrame
+            A table of the slice's points (``frame``, with whatever columns were added).
+
+        Returns
+        -------
+        dict of str to float
+            The first row's value of each fixed axis the table holds, in ``NAMES`` order.
+        """
         return {n: float(frame[n].iloc[0]) for n in self.fixed_axes() if n in frame}
 
 
 def text(values: Mapping[str, float], digits: int = 4) -> str:
-    """Settings as the maps write them, in ``NAMES`` order: ``"f = 0.45, d = 45 um"``."""
+    """Settings as the maps write them, in ``NAMES`` order.
+
+    Parameters
+    ----------
+    values : Mapping
+        Values by axis name (``Slice.fixed``).
+    digits : int, optional
+        Significant digits (``Parameter.text``).
+
+    Returns
+    -------
+    str
+        E.g. ``"f = 0.45, d = 45 um"``.
+    """
     return ", ".join(design.BY_NAME[n].text(values[n], digits) for n in design.NAMES if n in values)
 
 
