@@ -29,7 +29,11 @@ Where each concept is held (one module each):
   retried: ``case.retry``; its floor: ``case.substrate``
 * the cases the sweeps plan (the workflow's registry): ``sweeps`` (planned_cases, loop_labels)
 * design space: ``design.Design``, built once from the config (``Design.from_config``): names,
-  ranges, to / from the unit cube, axes; h/d (``design.h_over_d``); every ``ranges`` argument takes it
+  ranges, to / from the unit cube, axes; h/d (``design.h_over_d``); every ``ranges`` argument takes it;
+  the axes themselves (name, symbol, label, range, unit, nominal): ``design.PARAMETERS``, their one home
+* the 2-D slices (which two axes vary, on what grid, the fixed ones from config ``maps:`` /
+  ``decisions:`` or at their nominal value): ``slices`` (read by the maps, the decisions, the explorer
+  and the loop's criteria)
 * targets (name, labels, unit, SD and count columns, kind): ``targets`` (``REGISTRY``; read by
   metrics, surrogate, maps, decisions and the explorer)
 * results table, usable cases: ``table`` (build_table; ``usable`` = finished, not flagged and finite in

@@ -4,7 +4,15 @@ Tables, samples and figures all use these column names, in this order.
 
 ``Design`` is the one object that holds a study's design space: built once from the config
 (``Design.from_config``), it gives the names, the ranges, the maps to and from the unit cube,
-evenly spaced axes and the gap-to-diameter ratio h/d that the physics reads.  Every function of
+evenly spaced axes and the gap-to-diameter ratio h/d that the physics reads.
+
+``PARAMETERS`` is the axes' one home: name, symbol, figure label, default range, unit and the
+nominal value an axis takes where a map or a decision holds it fixed and the config names no value
+(``Design.nominal``). The 2-D slices the maps, the decisions and the loop's criteria read are
+defined once, over these axes, in ``spreadmap.slices``. The module globals ``PARAMETERS``,
+``NAMES`` and ``BY_NAME`` are read when called (``Design``, ``spreadmap.slices``,
+``spreadmap.sampling``, ``spreadmap.maps.grids``), so an axis registered here reaches them
+(tests/core/test_slices.py adds a toy fifth axis).  Every function of
 the package that takes a ``ranges`` argument takes a ``Design`` (or, as before, the config's
 ``ranges`` mapping, or None for the defaults of ``PARAMETERS``); ``Design.of`` is that rule.
 """
@@ -20,12 +28,51 @@ from .targets import names as target_names
 
 @dataclass(frozen=True)
 class Parameter:
+    """One design axis: its names, its default range and unit, and where a slice holds it.
+
+    Parameters
+    ----------
+    name : str
+        Its column name in every table (and its config key).
+    symbol : str
+        The symbol the maps write (``v`` in ``v = 6.1 mm/s``); ``n_<symbol>`` is its grid size's
+        config key.
+    label : str
+        Its axis label, with its unit, for figures.
+    low, high : float
+        Its default range, in its unit (config ``ranges`` overrides it).
+    unit : str
+        Its unit (``-`` for none).
+    nominal : float or None, optional
+        Its value where a slice holds it fixed and the config names none; None: the middle of its
+        range.
+    """
+
     name: str  # column name in every table
     symbol: str
     label: str  # axis label with unit, for figures
     low: float
     high: float
     unit: str
+    nominal: float | None = None  # where a slice holds it fixed and the config names no value; None: mid-range
+
+    def text(self, value: float, digits: int = 4) -> str:
+        """``symbol = value unit`` as the maps write a setting, e.g. ``"v = 6.1 mm/s"`` (no unit for [-]).
+
+        Parameters
+        ----------
+        value : float
+            The parameter's value, in its unit.
+        digits : int, optional
+            Significant digits (``g`` format).
+
+        Returns
+        -------
+        str
+            The setting as text.
+        """
+        unit = "" if self.unit == "-" else f" {self.unit}"
+        return f"{self.symbol} = {value:.{digits}g}{unit}"
 
 
 PARAMETERS: tuple[Parameter, ...] = (
@@ -204,6 +251,27 @@ class Design:
             Its ``Parameter.label``, e.g. ``"blade speed v [mm/s]"``.
         """
         return BY_NAME[name].label
+
+    def nominal(self, name: str, given: float | None = None) -> float:
+        """The value one parameter is held at where a slice fixes it.
+
+        Parameters
+        ----------
+        name : str
+            The parameter (one of ``NAMES``).
+        given : float or None, optional
+            The value the config names for it; None: it names none.
+
+        Returns
+        -------
+        float
+            `given` if not None, else the parameter's ``Parameter.nominal``, else the middle of its
+            range in this design.
+        """
+        if given is not None:
+            return float(given)
+        i = NAMES.index(name)
+        return float(BY_NAME[name].nominal) if BY_NAME[name].nominal is not None else (self.low[i] + self.high[i]) / 2
 
 
 def h_over_d(points) -> np.ndarray:

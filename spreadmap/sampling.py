@@ -17,12 +17,13 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
-from .design import NAMES, Design, to_physical
+from . import design
+from .design import Design, to_physical
 
 
 def halton_unit(n: int, seed: int) -> np.ndarray:
     """The first n points of the seeded scrambled Halton sequence in [0, 1)^4."""
-    return qmc.Halton(d=len(NAMES), scramble=True, seed=seed).random(n)
+    return qmc.Halton(d=len(design.NAMES), scramble=True, seed=seed).random(n)
 
 
 def lattice_unit(k: int) -> np.ndarray:
@@ -30,11 +31,11 @@ def lattice_unit(k: int) -> np.ndarray:
     if k < 2:
         raise ValueError(f"a lattice needs k >= 2 points per dimension (k = {k})")
     axis = np.linspace(0.0, 1.0, k)
-    return np.array(list(itertools.product(axis, repeat=len(NAMES))))
+    return np.array(list(itertools.product(axis, repeat=len(design.NAMES))))
 
 
 def _table(unit: np.ndarray, ranges: Design | Mapping | None) -> pd.DataFrame:
-    table = pd.DataFrame(to_physical(unit, ranges), columns=list(NAMES))
+    table = pd.DataFrame(to_physical(unit, ranges), columns=list(design.NAMES))
     table.insert(0, "index", np.arange(len(table)))
     return table
 
@@ -97,7 +98,7 @@ def chosen_points(points_config: dict | None, base_dir=".", presets=None) -> lis
         problem = point_name_problem(str(name))
         if problem:
             raise ValueError(f"config key 'points.named': {problem}")
-        out.append({"name": str(name), "point": {k: float(entry[k]) for k in NAMES},
+        out.append({"name": str(name), "point": {k: float(entry[k]) for k in design.NAMES},
                     "preset": entry.get("preset"), "seed": entry.get("seed")})
     csv = points_config.get("csv")
     if csv:
@@ -165,9 +166,9 @@ def read_points_csv(path, taken=(), presets=None) -> list[dict]:
             raise ValueError(f"points CSV {path}, row {header_line}, column {column!r}: given twice "
                              f"(columns {seen_columns[column] + 1} and {j + 1})")
         seen_columns[column] = j
-    missing = [c for c in NAMES if c not in header]
+    missing = [c for c in design.NAMES if c not in header]
     if missing:
-        raise ValueError(f"points CSV {path}: missing column(s) {missing}; required: {list(NAMES)}")
+        raise ValueError(f"points CSV {path}: missing column(s) {missing}; required: {list(design.NAMES)}")
 
     def refuse(row: int, column: str, problem: str):
         raise ValueError(f"points CSV {path}, row {row}, column {column!r}: {problem}")
@@ -182,7 +183,7 @@ def read_points_csv(path, taken=(), presets=None) -> list[dict]:
                              f"the row has {len(fields)} fields, the header {len(header)}")
         cell = {c: fields[j].strip() for c, j in seen_columns.items()}
         point = {}
-        for k in NAMES:
+        for k in design.NAMES:
             if not cell[k]:
                 refuse(row, k, "missing value")
             try:

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from spreadmap import design, slices
 from spreadmap.figures import new_figure, save_figure
 from spreadmap.files import write_text_atomically
 
@@ -82,7 +83,7 @@ def draw(first: pd.DataFrame, second: pd.DataFrame, targets, stem: Path, title: 
     axes[0].legend(fontsize=8)
     fig.suptitle(title, fontsize=10)
     both = pd.concat([first.assign(model=names[0]), second.assign(model=names[1])], ignore_index=True)
-    columns = ["model", "f", "d_um", "h_um", "v_mm_s", *[c for t in targets for c in (t, f"{t}_model_sd")], "supported"]
+    columns = ["model", *design.NAMES, *[c for t in targets for c in (t, f"{t}_model_sd")], "supported"]
     save_figure(fig, stem, both[columns])
 
 
@@ -137,8 +138,9 @@ def main(argv=None) -> int:
         parser.error(f"--names must be two different labels, got {names}")
     first, second = band_table(args.first), band_table(args.second)
     targets = ["mfr", second_target(second)]
-    h, v = second["h_um"].iloc[0], second["v_mm_s"].iloc[0]
-    slice_text = f"h {h:g} um, v {v:g} mm/s"
+    fixed = slices.POWDER.fixed_of(second)  # the maps' h and v (and any other fixed axis)
+    slice_text = ", ".join(f"{design.BY_NAME[n].symbol} {x:g}" + ("" if design.BY_NAME[n].unit == "-" else
+                                                                 f" {design.BY_NAME[n].unit}") for n, x in fixed.items())
     args.out.mkdir(parents=True, exist_ok=True)
     draw(first, second, targets, args.out / "powder_models",
          f"{args.title}, {slice_text}: the lowest (dashed) and highest friction, 95 % bands", names)

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from spreadmap.design import NAMES
 from spreadmap.files import write_text_atomically
 from spreadmap.table import usable_cases
 
@@ -43,7 +44,7 @@ def cell_stats(cases: pd.DataFrame) -> pd.DataFrame:
         ok = good[(good["point"] == point) & (good["arm"] == arm)]
         row = {"point": point, "arm": arm, "seeds": len(ok), "not_usable": len(group) - len(ok),
                "cpu_median": float(np.median(group["cpu_time"])), **{k: group[k].iloc[0] for k in
-               ("f", "d_um", "h_um", "v_mm_s", "density_scale", "young_pa", "surface_energy")}}
+               (*NAMES, "density_scale", "young_pa", "surface_energy")}}
         for t in TARGETS:
             x = ok[t].to_numpy(float)
             row[t] = x.mean() if len(x) else math.nan

@@ -8,6 +8,7 @@ from collections.abc import Mapping
 from .. import targets as registry
 from ..design import NAMES, bounds
 from ..schema import checked
+from ..slices import DECISIONS
 
 
 class DecisionError(ValueError):
@@ -111,7 +112,7 @@ def problems(config: Mapping) -> list[str]:
             out.append(f"config key '{key}': [{lo:g}, {hi:g}] reaches outside the design space "
                        f"(ranges.{name}: {limits[name][0]:g} to {limits[name][1]:g})")
 
-    for name in ("h_um", "v_mm_s"):
+    for name in DECISIONS.varying:
         lo, hi = dec["machine"][name]
         if lo == hi:
             out.append(f"config key 'decisions.machine.{name}': [{lo:g}, {hi:g}] is one value; give the machine's range")

@@ -24,6 +24,7 @@ import json
 import numpy as np
 import pandas as pd
 
+from .. import slices
 from ..design import NAMES
 from ..files import write_text_atomically
 from ..maps import grids
@@ -33,6 +34,9 @@ from .feasibility import Powder, feasibility
 from .figure import bounds_text
 
 COLUMNS = 3
+# the page's four axes: sliders over a powder (the powder maps' f, d), heat maps over the machine's
+# settings (the decisions' slice, h, v); any other axis at its nominal value
+EXPLORED = (*slices.POWDER.varying, *slices.DECISIONS.varying)
 DIGITS = 6
 
 
@@ -44,11 +48,11 @@ def explorer_data(model, dec: dict, support: dict) -> dict:
     """Everything the page shows, on the slider and axis grids (flat arrays ordered f, d, h, v)."""
     ex = dec["explorer"]
     low, high = np.asarray(model.design_low, float), np.asarray(model.design_high, float)
-    axis = {n: np.linspace(low[i], high[i], ex[f"n_{n.split('_')[0]}"]) for i, n in enumerate(NAMES)}
-    frame = grids.grid_frame(**axis)
+    axis = {n: np.linspace(low[NAMES.index(n)], high[NAMES.index(n)], ex[slices.size_key(n)]) for n in EXPLORED}
+    frame = grids.grid_frame(**axis)  # any other axis at its nominal value
     targets = list(model.targets)
     ev = grids.evaluate(model, frame, targets, support)
-    fs, ds, hs, vs = (axis[n] for n in NAMES)
+    fs, ds, hs, vs = (axis[n] for n in EXPLORED)
     region, prob = [], []
     for f in fs:
         for d in ds:
@@ -59,7 +63,8 @@ def explorer_data(model, dec: dict, support: dict) -> dict:
     cases = np.asarray(model.train_X, float)
     half_f = (fs[1] - fs[0]) / 2 if len(fs) > 1 else np.inf
     half_d = (ds[1] - ds[0]) / 2 if len(ds) > 1 else np.inf
-    near = [[int(k) for k in np.nonzero((np.abs(cases[:, 0] - f) <= half_f) & (np.abs(cases[:, 1] - d) <= half_d))[0]]
+    cf, cd = (cases[:, NAMES.index(n)] for n in slices.POWDER.varying)
+    near = [[int(k) for k in np.nonzero((np.abs(cf - f) <= half_f) & (np.abs(cd - d) <= half_d))[0]]
             for f in fs for d in ds]
     return {"targets": targets, "labels": {t: axis_label(t) for t in targets},
             "short": {t: short(t) for t in targets},
@@ -68,8 +73,7 @@ def explorer_data(model, dec: dict, support: dict) -> dict:
             "run_sd": {t: _round(ev[f"{t}_run_sd"]) for t in targets},
             "beyond": (~ev["supported"].to_numpy(bool)).astype(int).tolist(),
             "probability": _round(np.concatenate(prob)), "region": np.concatenate(region).astype(int).tolist(),
-            "cases": {"h": cases[:, 2].tolist(), "v": cases[:, 3].tolist(), "f": cases[:, 0].tolist(),
-                      "d": cases[:, 1].tolist(), "near": near},
+            "cases": {**{k: cases[:, NAMES.index(dict(zip("fdhv", EXPLORED))[k])].tolist() for k in "hvfd"}, "near": near},
             "confidence": dec["confidence"], "about": dec["about"], "bounds_text": bounds_text(dec["bounds"]),
             "support_text": support_rule(support)}
 
@@ -301,7 +305,7 @@ def write_explorer(model, dec: dict, support: dict, path, csv=None, floor: str |
 def explorer_table(data: dict) -> pd.DataFrame:
     """The page's numbers as a table (one row per grid point), for the CSV beside it."""
     mesh = np.meshgrid(data["f"], data["d"], data["h"], data["v"], indexing="ij")
-    out = pd.DataFrame({n: m.ravel() for n, m in zip(NAMES, mesh)})
+    out = pd.DataFrame({n: m.ravel() for n, m in zip(EXPLORED, mesh)})
     for t in data["targets"]:
         out[t], out[f"{t}_model_sd"], out[f"{t}_run_sd"] = data["mean"][t], data["model_sd"][t], data["run_sd"][t]
     out["beyond_data"], out["probability"], out["recommended_region"] = data["beyond"], data["probability"], data["region"]

@@ -44,10 +44,12 @@ import pandas as pd
 from scipy.special import ndtr
 from threadpoolctl import threadpool_limits
 
+from .. import slices
 from ..design import NAMES
 from ..maps import grids
 from .config_section import DecisionError, powder_size, span
 
+SETTINGS = slices.DECISIONS  # the machine's (h, v) at a powder: the one definition, spreadmap.slices
 STATUSES = ("recommended", "beyond_data", "beyond_data_only", "none_meets")
 BLOCK_POINTS = 400  # design points per joint draw (a GP draw factorises a matrix of this side; cost ~ side^3)
 
@@ -67,11 +69,13 @@ class Powder:
     def ranged(self) -> bool:
         return self.f[0] != self.f[1] or self.d_um[0] != self.d_um[1]
 
-    def points(self, n: int) -> np.ndarray:
-        """(m, 2) powders (f, d) covering the range: n values per ranged parameter, ends included."""
+    def points(self, n: int) -> pd.DataFrame:
+        """The powders covering the range, f slowest: n values per ranged parameter, ends included;
+        columns f and d_um (the powder maps' axes, ``spreadmap.slices.POWDER.varying``)."""
         fs = np.linspace(self.f[0], self.f[1], n) if self.f[0] != self.f[1] else np.array([self.f[0]])
         ds = np.linspace(self.d_um[0], self.d_um[1], n) if self.d_um[0] != self.d_um[1] else np.array([self.d_um[0]])
-        return np.array([(f, d) for f in fs for d in ds], float)
+        f, d = np.meshgrid(fs, ds, indexing="ij")
+        return pd.DataFrame({"f": f.ravel(), "d_um": d.ravel()})
 
     def label(self) -> str:
         def one(v, fmt):
@@ -102,8 +106,10 @@ def powders_from_config(dec: dict) -> list[Powder]:
 
 
 def setting_grid(dec: dict) -> tuple[np.ndarray, np.ndarray]:
-    machine = dec["machine"]
-    return (np.linspace(*machine["h_um"], machine["n_h"]), np.linspace(*machine["v_mm_s"], machine["n_v"]))
+    """The machine's settings searched: the decisions' slice's axes (``spreadmap.slices.DECISIONS``:
+    h and v over ``decisions.machine``'s limits, n_h and n_v values, ends included)."""
+    axes = SETTINGS.axes(dec["machine"])
+    return tuple(axes[n] for n in SETTINGS.varying)
 
 
 def check_inputs(model, dec: dict, powders) -> None:
@@ -117,7 +123,7 @@ def check_inputs(model, dec: dict, powders) -> None:
         raise DecisionError(f"config key 'decisions.quality.target': the surrogate has no target "
                             f"{dec['quality']['target']!r} (its targets: {list(model.targets)})")
     low, high = np.asarray(model.design_low, float), np.asarray(model.design_high, float)
-    for name in ("h_um", "v_mm_s"):
+    for name in SETTINGS.varying:
         i = NAMES.index(name)
         lo, hi = dec["machine"][name]
         if lo < low[i] or hi > high[i]:
@@ -126,7 +132,7 @@ def check_inputs(model, dec: dict, powders) -> None:
     data = np.asarray(model.train_X, float)
     tolerance = model.spacing() * (high - low)  # one median case spacing, per parameter
     for powder in powders:
-        for name in ("f", "d_um"):
+        for name in slices.POWDER.varying:
             i = NAMES.index(name)
             lo, hi = getattr(powder, name)
             key = f"config key 'decisions.powders.{powder.name}.{powder.size_key if name == 'd_um' else name}'"
@@ -160,13 +166,14 @@ def feasibility(model, powder: Powder, h, v, bounds: dict, quality: dict, suppor
     bounded target's posterior mean, lowest and highest over the range."""
     if about not in ("run", "mean"):
         raise DecisionError(f"config key 'decisions.about': {about!r} is not one of ['run', 'mean']")
-    h, v = np.asarray(h, float), np.asarray(v, float)
-    settings = np.array([(hh, vv) for hh in h for vv in v], float)
-    P = powder.points(range_points)
-    m = len(P)
-    X = np.column_stack([np.tile(P, (len(settings), 1)), np.repeat(settings, m, axis=0)])  # NAMES order
+    axes = dict(zip(SETTINGS.varying, (np.asarray(h, float), np.asarray(v, float))))
+    powders = powder.points(range_points)
+    m = len(powders)
+    points = SETTINGS.frame(axes, powders)  # each setting with every powder of the range
+    settings = points[list(SETTINGS.varying)].to_numpy(float)[::m]
+    X = points.to_numpy(float)
     targets = list(dict.fromkeys([*bounds, quality["target"]]))
-    frame = grids.evaluate(model, pd.DataFrame(X, columns=list(NAMES)), targets, support)
+    frame = grids.evaluate(model, points, targets, support)
     ratio = np.max([frame[f"{t}_sd_ratio"] for t in targets], axis=0)
     per_block = max(1, BLOCK_POINTS // m)
     prob = np.empty(len(settings))
@@ -184,7 +191,7 @@ def feasibility(model, powder: Powder, h, v, bounds: dict, quality: dict, suppor
         return getattr(np.asarray(values, float).reshape(len(settings), m), how)(axis=1)
 
     worst = "min" if quality["goal"] == "max" else "max"
-    out = pd.DataFrame({"h_um": settings[:, 0], "v_mm_s": settings[:, 1], "probability": prob,
+    out = pd.DataFrame({**dict(zip(SETTINGS.varying, settings.T)), "probability": prob,
                         "beyond_data": ~per_setting(frame["supported"], "min").astype(bool),
                         "data_distance": per_setting(frame["data_distance"], "max"),
                         "sd_ratio": per_setting(ratio, "max"),

@@ -7,6 +7,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.patches import Patch
 
+from ..design import BY_NAME
 from ..figures import new_figure, save_figure
 from ..maps.style import HATCH, support_rule
 from ..targets import short
@@ -98,8 +99,8 @@ def decision_figure(grids: dict, table: pd.DataFrame, powders, dec: dict, suppor
         elif "beyond_data_only" in status:
             title += f"\nP >= {dec['confidence']:g} only beyond the data"
         ax.set_title(title, fontsize=9)
-        ax.set_xlabel("blade speed v [mm/s]")
-        ax.set_ylabel("layer thickness h [um]")
+        ax.set_xlabel(BY_NAME["v_mm_s"].label)
+        ax.set_ylabel(BY_NAME["h_um"].label)
     for ax in axes[n:]:
         ax.set_visible(False)
     fig.colorbar(mesh, ax=axes[:n].tolist(), label=("P(a new run meets every bound)" if dec["about"] == "run"

@@ -66,7 +66,8 @@ import pandas as pd
 from scipy import stats
 from sklearn.model_selection import KFold
 
-from ..design import NAMES, TARGETS, Design
+from .. import slices
+from ..design import TARGETS, Design
 from ..schema import checked
 from ..study_rule.rule import DEFAULT_FLOORS, STATISTICS
 from ..table import usable_cases
@@ -139,29 +140,20 @@ def criteria(conv: Mapping, targets: Sequence[str] | None = None) -> dict[str, A
 # the map grids
 # ----------------------------------------------------------------------------------------------
 def map_grids(maps_cfg: Mapping | None = None, ranges: Design | Mapping | None = None, box_k: int = 5,
-              n_d: int = 41, n_f: int = 5) -> dict[str, np.ndarray]:
-    """Points (physical units, NAMES order) where the maps are read.
+              n_d: int | None = None, n_f: int | None = None) -> dict[str, np.ndarray]:
+    """Points (physical units, NAMES order) where the maps are read: the maps' slices
+    (``spreadmap.slices``) as config ``maps:`` sets them, and the design box.
 
-    * ``box``: box_k^4 cell centres of the design box (no face is over-weighted);
-    * ``machine``: the machine map's n_h x n_v grid of h and v at its f and d;
-    * ``powder``: the powder maps' n_d x n_f grid of d and f at their h and v.
+    * ``box``: box_k^N cell centres of the design box (no face is over-weighted; ``slices.box``);
+    * ``machine``: the machine map's n_h x n_v grid of h and v at its f and d (``slices.MACHINE``);
+    * ``powder``: the powder maps' n_d x n_f grid of d and f at their h and v (``slices.POWDER``;
+      n_d, n_f: None, the slice's 41 and 5).
     Fixed values and sizes from config ``maps:``, the schema's defaults filled.
     """
-    maps_cfg = checked("maps", maps_cfg)
-    mach, powd = maps_cfg["machine"], maps_cfg["powder"]
-    design = Design.of(ranges)
-    axis = design.axis
-
-    def grid(**cols):
-        mesh = np.meshgrid(*[np.atleast_1d(np.asarray(cols[n], float)) for n in NAMES], indexing="ij")
-        return np.column_stack([m.ravel() for m in mesh])
-
-    centres = (np.arange(box_k) + 0.5) / box_k
-    box = grid(**dict(zip(NAMES, design.to_physical(np.repeat(centres[:, None], len(NAMES), axis=1)).T, strict=True)))
-    machine = grid(f=mach["f"], d_um=mach["d_um"], h_um=axis("h_um", int(mach["n_h"])),
-                   v_mm_s=axis("v_mm_s", int(mach["n_v"])))
-    powder = grid(f=axis("f", n_f), d_um=axis("d_um", n_d), h_um=powd["h_um"], v_mm_s=powd["v_mm_s"])
-    return {"box": box, "machine": machine, "powder": powder}
+    config = {"maps": maps_cfg or {}}
+    return {"box": slices.box(ranges, box_k),
+            "machine": slices.MACHINE.points(config, Design.of(ranges)),
+            "powder": slices.POWDER.points(config, Design.of(ranges), {"d_um": n_d, "f": n_f})}
 
 
 # ----------------------------------------------------------------------------------------------

@@ -12,47 +12,15 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from .. import design, slices
 from .. import targets as registry
-from ..design import NAMES, Design
+from ..design import Design
 from ..schema import checked
+from ..slices import axis_values as values  # noqa: F401  (the maps' name for it)
 
 # config `maps:` at the schema's defaults (schemas/config.schema.yaml): the maps' keyword defaults, for
 # callers without a config (the workflow passes its config's values)
 MAP_DEFAULTS = checked("maps")
-
-
-def values(given, n: int, name: str, ranges=None) -> np.ndarray:
-    """The values of one map axis: the explicit ones if given (sorted), else ``n`` spanning its range.
-
-    Parameters
-    ----------
-    given : array_like or None
-        Explicit values in the parameter's unit; None: ``n`` values over the range.
-    n : int
-        How many values over the range, both ends included (at least 2); used only without `given`.
-    name : str
-        The parameter (one of ``NAMES``: f, d_um, h_um, v_mm_s).
-    ranges : Design, mapping or None, optional
-        The design space (``spreadmap.design.Design``, or the config's ``ranges``); None: the default ranges.
-
-    Returns
-    -------
-    numpy.ndarray
-        The axis values, ascending, in the parameter's unit.
-
-    Raises
-    ------
-    ValueError
-        If `given` is empty, or `n` is below 2 without `given`.
-    """
-    if given is not None:
-        v = np.asarray(given, float).ravel()
-        if v.size == 0:
-            raise ValueError(f"no values given for {name}")
-        return np.sort(v)
-    if n < 2:
-        raise ValueError(f"grid size for {name} must be >= 2")
-    return Design.of(ranges).axis(name, n)
 
 
 def grid_frame(**columns) -> pd.DataFrame:
@@ -61,17 +29,18 @@ def grid_frame(**columns) -> pd.DataFrame:
     Parameters
     ----------
     **columns : array_like or float
-        One entry per parameter of ``NAMES`` (f [-], d_um [um], h_um [um], v_mm_s [mm/s]): its
-        values (a scalar for a fixed one).
+        Values of parameters of ``NAMES`` (f [-], d_um [um], h_um [um], v_mm_s [mm/s]): its
+        values (a scalar for a fixed one); a parameter left out is held at its nominal value
+        (``Design.nominal`` of the default design).
 
     Returns
     -------
     pandas.DataFrame
-        One row per grid point, columns in NAMES order.
+        One row per grid point, columns in NAMES order (the first of NAMES varying slowest).
     """
-    order = [n for n in NAMES if n in columns]
-    mesh = np.meshgrid(*[np.atleast_1d(np.asarray(columns[n], float)) for n in order], indexing="ij")
-    return pd.DataFrame({n: m.ravel() for n, m in zip(order, mesh)})[list(NAMES)]
+    columns = {n: columns[n] if n in columns else Design.of(None).nominal(n) for n in design.NAMES}
+    mesh = np.meshgrid(*[np.atleast_1d(np.asarray(columns[n], float)) for n in design.NAMES], indexing="ij")
+    return pd.DataFrame({n: m.ravel() for n, m in zip(design.NAMES, mesh)})
 
 
 def evaluate(model, frame: pd.DataFrame, targets, support: dict) -> pd.DataFrame:
@@ -98,7 +67,7 @@ def evaluate(model, frame: pd.DataFrame, targets, support: dict) -> pd.DataFrame
         correction), in the target's unit; and ``data_distance`` and ``supported`` (the module
         docstring).
     """
-    X = frame[list(NAMES)].to_numpy(float)
+    X = frame[list(design.NAMES)].to_numpy(float)
     out = frame.copy()
     # whether the data support a point is the model's own knowledge against its cases' noise: a
     # preset-to-reference factor (spreadmap.surrogate.correction) widens every SD alike and is not data
@@ -118,12 +87,13 @@ def evaluate(model, frame: pd.DataFrame, targets, support: dict) -> pd.DataFrame
     return out
 
 
-def f_effect(model, targets, h_um: float, v_mm_s: float, d: np.ndarray, f_low: float, f_high: float,
+def f_effect(model, targets, fixed, d: np.ndarray, f_low: float, f_high: float,
              draws: int = 200, seed: int = 0) -> pd.DataFrame:
     """Per d: the change of each target from f_low to f_high, with its 95 % interval and P(change > 0).
 
     The change is read on the mean function; its interval and probability from joint draws (both
-    ends of the change in the same draw).
+    ends of the change in the same draw). The points are the powder maps' slice
+    (``spreadmap.slices.POWDER``) at each friction.
 
     Parameters
     ----------
@@ -131,10 +101,9 @@ def f_effect(model, targets, h_um: float, v_mm_s: float, d: np.ndarray, f_low: f
         The fitted surrogate.
     targets : sequence of str
         The targets.
-    h_um : float
-        Layer thickness [um].
-    v_mm_s : float
-        Blade speed [mm/s].
+    fixed : Mapping
+        The slice's fixed axes (layer thickness ``h_um`` [um], blade speed ``v_mm_s`` [mm/s]);
+        an axis left out at its nominal value.
     d : numpy.ndarray
         Particle diameters [um], shape (n,).
     f_low, f_high : float
@@ -150,8 +119,7 @@ def f_effect(model, targets, h_um: float, v_mm_s: float, d: np.ndarray, f_low: f
         One row per d: ``d_um`` and per target ``<t>_change``, ``<t>_change_low``,
         ``<t>_change_high`` (2.5 and 97.5 % of the draws) and ``<t>_p_increase``.
     """
-    X = np.vstack([grid_frame(f=f_low, d_um=d, h_um=h_um, v_mm_s=v_mm_s).to_numpy(),
-                   grid_frame(f=f_high, d_um=d, h_um=h_um, v_mm_s=v_mm_s).to_numpy()])
+    X = np.vstack([slices.POWDER.frame({"f": [f], "d_um": d}, fixed).to_numpy(float) for f in (f_low, f_high)])
     F = model.draws(X, draws, seed=seed, targets=list(targets))
     mean = model.predict_stats(X)
     rows = {"d_um": d}

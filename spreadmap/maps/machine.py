@@ -16,6 +16,7 @@ from matplotlib import colors as mcolors
 from matplotlib.lines import Line2D
 from matplotlib.patches import Ellipse, Polygon
 
+from .. import slices
 from ..design import BY_NAME
 from ..figures import new_figure, save_figure
 from ..targets import axis_label, definition, short
@@ -24,6 +25,7 @@ from .labels import end_label, which_labelled
 from .style import HATCH, MapResult, fmt, set_limits, support_note, with_model_note
 
 MACHINE = grids.MAP_DEFAULTS["machine"]
+MACHINE_SLICE = slices.MACHINE  # h x v at fixed powder: the one definition, spreadmap.slices
 
 
 def machine_map(model, stem, y: str = "pd", f: float = MACHINE["f"], d_um: float = MACHINE["d_um"],
@@ -85,8 +87,7 @@ def machine_map(model, stem, y: str = "pd", f: float = MACHINE["f"], d_um: float
     """
     support = support or grids.MAP_DEFAULTS["support"]
     grid = machine_grid(model, y, f, d_um, n_h, n_v, h_values, v_values, ranges, support)
-    h, v = grids.values(h_values, n_h, "h_um", ranges), grids.values(v_values, n_v, "v_mm_s", ranges)
-    return draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels, y_note, floor, model_note)
+    return draw_machine_map(grid, stem, y, support, max_labels, y_note, floor, model_note)
 
 
 def machine_grid(model, y: str = "pd", f: float = MACHINE["f"], d_um: float = MACHINE["d_um"],
@@ -120,9 +121,10 @@ def machine_grid(model, y: str = "pd", f: float = MACHINE["f"], d_um: float = MA
         mean, model SD and noise SD, and ``supported``.
     """
     support = support or grids.MAP_DEFAULTS["support"]
-    h = grids.values(h_values, n_h, "h_um", ranges)
-    v = grids.values(v_values, n_v, "v_mm_s", ranges)
-    return grids.evaluate(model, grids.grid_frame(f=f, d_um=d_um, h_um=h, v_mm_s=v), ["mfr", y], support)
+    axes = MACHINE_SLICE.axes(ranges=ranges, sizes={"h_um": n_h, "v_mm_s": n_v},
+                              given={"h_um": h_values, "v_mm_s": v_values})
+    frame = MACHINE_SLICE.frame(axes, {"f": f, "d_um": d_um}, ranges)
+    return grids.evaluate(model, frame, ["mfr", y], support)
 
 
 # where the noise cross may go (axes fractions of its left end; its note runs ~0.35 to the right)
@@ -139,8 +141,12 @@ def emptiest_corner(ax, xs, ys) -> tuple[float, float]:
     return min(CORNERS, key=count)
 
 
-def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note=None, floor=None,
+def draw_machine_map(grid, stem, y, support, max_labels=7, y_note=None, floor=None,
                      model_note=None) -> MapResult:
+    """The machine map from ``machine_grid``'s table (or its CSV read back): its h and v values and
+    its fixed powder read from the table; saved with that table (the arguments as ``machine_map``
+    takes them)."""
+    h, v = (np.unique(grid[n]) for n in MACHINE_SLICE.varying)
     shape = (len(h), len(v))
     X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
     sx, sy = grid["mfr_model_sd"].to_numpy().reshape(shape), grid[f"{y}_model_sd"].to_numpy().reshape(shape)
@@ -184,11 +190,11 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
     placed = []
     for j in range(len(v)):
         if j in v_lab:
-            end_label(ax, X[:, j], Y[:, j], f"v = {fmt(v[j])} mm/s", edge=mcolors.to_hex(cmap(vnorm(v[j]))),
+            end_label(ax, X[:, j], Y[:, j], BY_NAME["v_mm_s"].text(v[j]), edge=mcolors.to_hex(cmap(vnorm(v[j]))),
                       placed=placed)
     for i in range(len(h)):
         if i in h_lab:
-            end_label(ax, X[i], Y[i], f"h = {fmt(h[i])} um", colour="0.1", edge="0.3", placed=placed)
+            end_label(ax, X[i], Y[i], BY_NAME["h_um"].text(h[i]), colour="0.1", edge="0.3", placed=placed)
     handles = [Line2D([], [], color=cmap(0.6), lw=2.2, label="constant blade speed v (solid)"),
                Line2D([], [], color="0.15", lw=1.3, ls="--", label="constant layer thickness h (dashed)"),
                Line2D([], [], marker="o", ls="", color="0.5", alpha=0.4, ms=9, label="± one model SD (ellipse)"),
@@ -203,8 +209,9 @@ def draw_machine_map(grid, stem, y, f, d_um, h, v, support, max_labels=7, y_note
         ax.text(0.01, 0.01, y_note, transform=ax.transAxes, fontsize=7, va="bottom", ha="left", color="0.25")
     ax.grid(alpha=0.3)
     beyond = "" if ok.any() else "BEYOND THE DATA: "
-    title = ax.set_title(f"{beyond}Machine map at f = {fmt(f)}, d = {fmt(d_um)} um: h {fmt(h.min())}-{fmt(h.max())} um, "
-                 f"v {fmt(v.min())}-{fmt(v.max())} mm/s" + with_model_note(model_note), fontsize=10)
+    title = ax.set_title(f"{beyond}Machine map at {slices.text(MACHINE_SLICE.fixed_of(grid))}: "
+                         f"h {fmt(h.min())}-{fmt(h.max())} um, v {fmt(v.min())}-{fmt(v.max())} mm/s"
+                         + with_model_note(model_note), fontsize=10)
     note = support_note(fig, grid["supported"].to_numpy(), support, "settings")
     paths = save_figure(fig, stem, grid, floor)
     return MapResult(paths, grid, {"y": y, "note": note, "title": title.get_text(), "n_unsupported": int((~ok).sum())})

@@ -13,6 +13,7 @@ import pandas as pd  # noqa: E402
 from matplotlib import colors as mcolors  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
+from .. import slices  # noqa: E402
 from .. import targets as registry  # noqa: E402
 from ..design import BY_NAME, NAMES, Design  # noqa: E402
 from ..figures import save_figure  # noqa: E402
@@ -152,9 +153,8 @@ def parallel_coordinates(
         ax.set_yticks([])
         ax.set_xlim(-0.35, len(NAMES) - 1 + 1.25)  # right margin holds the best-case box
         ax.set_title(f"Cases coloured by normalised {name}", fontsize=10)
-        text = (f"best case{': ' + str(best['case_id']) if 'case_id' in best else ''}\n"
-                f"f = {best['f']:.3g}, d = {best['d_um']:.3g} um\n"
-                f"h = {best['h_um']:.3g} um, v = {best['v_mm_s']:.3g} mm/s\n"
+        point = "\n".join(slices.text({n: best[n] for n in NAMES[i:i + 2]}, 3) for i in range(0, len(NAMES), 2))
+        text = (f"best case{': ' + str(best['case_id']) if 'case_id' in best else ''}\n{point}\n"
                 f"MFR = {best['mfr']:.3f}, PD = {best['pd']:.3f}")
         ax.annotate(text, (xpos[-1], xb[-1]), xytext=(xpos[-1] + 0.2, 0.5), textcoords="data",
                     va="center", ha="left", fontsize=8.5, zorder=7,

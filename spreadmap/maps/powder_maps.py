@@ -20,6 +20,7 @@ import pandas as pd
 from matplotlib import colors as mcolors
 from matplotlib.lines import Line2D
 
+from .. import slices
 from ..design import BY_NAME
 from ..figures import new_figure, save_figure
 from ..targets import axis_label, short
@@ -28,13 +29,16 @@ from .labels import end_label, right_labels
 from .style import HATCH, MapResult, fmt, set_limits, support_note, with_model_note
 
 POWDER = grids.MAP_DEFAULTS["powder"]
+POWDER_SLICE = slices.POWDER  # f x d at fixed machine settings: the one definition, spreadmap.slices
+BAND_SIZES = POWDER_SLICE.sizes  # map (a)'s grid, the one the loop's criteria read
 DEFAULT_SUPPORT = grids.MAP_DEFAULTS["support"]
 EFFECT = ("change", "change_low", "change_high", "p_increase")  # grids.f_effect's columns per target
 
 
-def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"], n_d: int = 41,
-                    n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
-                    seed: int = 0, floor: str | None = None, model_note: str | None = None) -> MapResult:
+def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"],
+                    n_d: int = BAND_SIZES["d_um"], n_f: int = BAND_SIZES["f"], d_values=None, f_values=None,
+                    ranges=None, support=None, draws: int = 200, seed: int = 0, floor: str | None = None,
+                    model_note: str | None = None) -> MapResult:
     """Powder map (a): MFR and y against d, one curve per friction value, at fixed machine settings (h, v).
 
     The lowest and the highest friction are drawn with their 95 % bands of the mean (model SD),
@@ -95,18 +99,25 @@ def powder_band_map(model, stem, y: str = "pd", h_um: float = POWDER["h_um"], v_
 
 
 def powder_band_grid(model, y: str = "pd", h_um: float = POWDER["h_um"], v_mm_s: float = POWDER["v_mm_s"],
-                     n_d: int = 41, n_f: int = 5, d_values=None, f_values=None, ranges=None, support=None, draws: int = 200,
-                     seed: int = 0) -> pd.DataFrame:
+                     n_d: int = BAND_SIZES["d_um"], n_f: int = BAND_SIZES["f"], d_values=None, f_values=None,
+                     ranges=None, support=None, draws: int = 200, seed: int = 0) -> pd.DataFrame:
     """The numbers of map (a): the (f, d) grid at (h, v), f varying slowest, evaluated for MFR and y
     (grids.evaluate), each row with the change of both from the lowest to the highest f at its d
     and that change's 95 % interval from joint draws (grids.f_effect)."""
     support = support or DEFAULT_SUPPORT
-    d = grids.values(d_values, n_d, "d_um", ranges)
-    fv = grids.values(f_values, n_f, "f", ranges)
+    axes, fixed = powder_slice(n_d, n_f, d_values, f_values, ranges, h_um, v_mm_s)
     targets = ["mfr", y]
-    grid = grids.evaluate(model, grids.grid_frame(f=fv, d_um=d, h_um=h_um, v_mm_s=v_mm_s), targets, support)
-    effect = grids.f_effect(model, targets, h_um, v_mm_s, d, fv[0], fv[-1], draws=draws, seed=seed)
+    grid = grids.evaluate(model, POWDER_SLICE.frame(axes, fixed, ranges), targets, support)
+    fv = axes["f"]
+    effect = grids.f_effect(model, targets, fixed, axes["d_um"], fv[0], fv[-1], draws=draws, seed=seed)
     return grid.merge(effect, on="d_um", how="left")
+
+
+def powder_slice(n_d, n_f, d_values, f_values, ranges, h_um, v_mm_s) -> tuple[dict, dict]:
+    """The powder maps' slice (``spreadmap.slices.POWDER``): its f and d values and its fixed axes
+    (h, v as given, any other axis at its nominal value)."""
+    axes = POWDER_SLICE.axes(ranges=ranges, sizes={"d_um": n_d, "f": n_f}, given={"d_um": d_values, "f": f_values})
+    return axes, POWDER_SLICE.fixed({"h_um": h_um, "v_mm_s": v_mm_s}, ranges)
 
 
 def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor: str | None = None,
@@ -115,7 +126,6 @@ def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor
     (``model_note``: a line under the title, as ``powder_band_map`` takes it)."""
     targets = ["mfr", y]
     fv, d = np.unique(table["f"]), np.unique(table["d_um"])
-    h_um, v_mm_s = float(table["h_um"].iloc[0]), float(table["v_mm_s"].iloc[0])
     effect = table[table["f"] == fv[0]][["d_um"] + [f"{t}_{c}" for t in targets for c in EFFECT]].reset_index(drop=True)
     shape = (len(fv), len(d))
     ok = table["supported"].to_numpy().reshape(shape)
@@ -141,7 +151,7 @@ def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor
             ax.set_ylim(lo, hi)
         ax.set_ylabel(axis_label(t))
         ax.set_xlim(d.min(), d.max() + 0.2 * np.ptp(d))
-        right_labels(ax, d[-1], z[:, -1], [f"f = {fmt(x)}" for x in fv], fcol)
+        right_labels(ax, d[-1], z[:, -1], [BY_NAME["f"].text(x) for x in fv], fcol)
         ax.set_title(f"{short(t)} against particle diameter; shaded: 95 % band of the mean "
                      f"(f = {fmt(fv[0])}, {fmt(fv[-1])})", fontsize=9)
         ax.grid(alpha=0.3)
@@ -162,7 +172,7 @@ def draw_powder_band_map(table: pd.DataFrame, stem, y: str, support: dict, floor
                Line2D([], [], color="0.3", lw=1.4, ls=":", label="beyond the data")]
     axes[0, 0].legend(handles=handles, fontsize=7.5, loc="best")
     fig.suptitle(f"Powder map (a): friction f = {fmt(fv[0])}-{fmt(fv[-1])} as the diameter varies, "
-                 f"at h = {fmt(h_um)} um, v = {fmt(v_mm_s)} mm/s" + with_model_note(model_note), fontsize=11)
+                 f"at {slices.text(POWDER_SLICE.fixed_of(table))}" + with_model_note(model_note), fontsize=11)
     note = support_note(fig, table["supported"].to_numpy(), support)
     paths = save_figure(fig, stem, table, floor)
     return MapResult(paths, table, {"note": note, "effect": effect})
@@ -223,15 +233,13 @@ def powder_cluster_grid(model, y: str = "pd", h_um: float = POWDER["h_um"], v_mm
                         n_d: int = 5, n_f: int = 7, d_values=None, f_values=None, ranges=None, support=None) -> pd.DataFrame:
     """The numbers of map (b): the (f, d) grid at (h, v), f varying slowest, evaluated for MFR and y."""
     support = support or DEFAULT_SUPPORT
-    d = grids.values(d_values, n_d, "d_um", ranges)
-    fv = grids.values(f_values, n_f, "f", ranges)
-    return grids.evaluate(model, grids.grid_frame(f=fv, d_um=d, h_um=h_um, v_mm_s=v_mm_s), ["mfr", y], support)
+    axes, fixed = powder_slice(n_d, n_f, d_values, f_values, ranges, h_um, v_mm_s)
+    return grids.evaluate(model, POWDER_SLICE.frame(axes, fixed, ranges), ["mfr", y], support)
 
 
 def draw_powder_cluster_map(grid: pd.DataFrame, stem, y: str, support: dict, floor: str | None = None) -> MapResult:
     """Map (b) from ``powder_cluster_grid``'s grid (or its CSV read back); saved with that grid."""
     fv, d = np.unique(grid["f"]), np.unique(grid["d_um"])
-    h_um, v_mm_s = float(grid["h_um"].iloc[0]), float(grid["v_mm_s"].iloc[0])
     shape = (len(fv), len(d))
     X, Y = grid["mfr"].to_numpy().reshape(shape), grid[y].to_numpy().reshape(shape)
     sx, sy = grid["mfr_model_sd"].to_numpy().reshape(shape), grid[f"{y}_model_sd"].to_numpy().reshape(shape)
@@ -253,7 +261,7 @@ def draw_powder_cluster_map(grid: pd.DataFrame, stem, y: str, support: dict, flo
         ax.scatter(X[ok[:, j], j], Y[ok[:, j], j], s=sizes[ok[:, j]], color=c, edgecolor="black", lw=0.4, zorder=3)
         ax.scatter(X[~ok[:, j], j], Y[~ok[:, j], j], s=sizes[~ok[:, j]], facecolor="white", edgecolor=c, lw=1.2,
                    zorder=3)
-        end_label(ax, X[:, j], Y[:, j], f"d = {fmt(d[j])} um", at="start", fontsize=9, distance=10,
+        end_label(ax, X[:, j], Y[:, j], BY_NAME["d_um"].text(d[j]), at="start", fontsize=9, distance=10,
                   edge=mcolors.to_hex(c), placed=placed)
     handles = [Line2D([], [], marker="o", ls="-", color="0.5", mec="black", ms=5,
                       label=f"{len(fv)} friction values {fmt(fv[0])}-{fmt(fv[-1])}, marker size grows with f"),
@@ -262,8 +270,8 @@ def draw_powder_cluster_map(grid: pd.DataFrame, stem, y: str, support: dict, flo
     ax.legend(handles=handles, loc="best", fontsize=7.5, framealpha=0.9)
     ax.set_xlabel(axis_label("mfr"))
     ax.set_ylabel(axis_label(y))
-    ax.set_title(f"Powder map (b): clusters of constant diameter as friction varies, at h = {fmt(h_um)} um, "
-                 f"v = {fmt(v_mm_s)} mm/s", fontsize=10)
+    ax.set_title(f"Powder map (b): clusters of constant diameter as friction varies, at "
+                 f"{slices.text(POWDER_SLICE.fixed_of(grid))}", fontsize=10)
     ax.grid(alpha=0.3)
     note = support_note(fig, grid["supported"].to_numpy(), support)
     paths = save_figure(fig, stem, grid, floor)

@@ -22,21 +22,24 @@ import pandas as pd
 from matplotlib import colors as mcolors
 from matplotlib.lines import Line2D
 
-from ..design import BY_NAME, NAMES, h_over_d
+from .. import design, slices
+from ..design import BY_NAME, h_over_d
 from ..figures import new_figure, save_figure
 from ..files import atomic_path
 from . import grids
-from .style import MapResult, fmt, support_note
+from .style import MapResult, support_note
 
 PLANE = grids.MAP_DEFAULTS["regime_plane"]
+PLANE_SLICE = slices.REGIME_PLANE  # d x h at fixed f, v: the one definition, spreadmap.slices
+PLANE_SIZES = PLANE_SLICE.sizes
 
 REGIMES = ("normal", "jamming", "short_feed")
 COLOURS = {"normal": "tab:green", "jamming": "tab:red", "short_feed": "tab:orange"}
 MARKERS = {"normal": "o", "jamming": "X", "short_feed": "s"}
 NAMES_LONG = {"normal": "normal extrusion", "jamming": "jamming", "short_feed": "short feed"}
-# the plane's numbers written beside the figure: the point, its support, the predictive normal of
+# the plane's numbers written beside the figure (after the point's NAMES): its support, the predictive normal of
 # each target the rule reads (mean, SD of a new run) and the regime probabilities drawn from them
-PLANE_COLUMNS = [*NAMES, "data_distance", "supported", *(c for t in grids.REGIME_TARGETS for c in (t, f"{t}_run_sd")),
+PLANE_COLUMNS = ["data_distance", "supported", *(c for t in grids.REGIME_TARGETS for c in (t, f"{t}_run_sd")),
                  "p_normal", "p_jamming", "p_short_feed"]
 
 
@@ -76,14 +79,15 @@ def regime_counts(dem: np.ndarray, model: np.ndarray) -> pd.DataFrame:
 
 
 def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
-                   f: float = PLANE["f"], v_mm_s: float = PLANE["v_mm_s"], n_d: int = 60, n_h: int = 40, ranges=None,
+                   f: float = PLANE["f"], v_mm_s: float = PLANE["v_mm_s"], n_d: int = PLANE_SIZES["d_um"],
+                   n_h: int = PLANE_SIZES["h_um"], ranges=None,
                    support=None, floor: str | None = None) -> MapResult:
     """The regime figure and the plane's numbers beside it.
 
     The figure (``stem``.png/.pdf, the cases' table as ``stem``.csv): left, the cases in the
     (h/d, v) plane by DEM regime; right, the most probable regime of a new run over the (d, h) plane
     at (f, v) with probability contours (see the module docstring). The plane's numbers are written
-    beside it (``stem``_plane.csv: ``PLANE_COLUMNS``, and ``floor`` when given). The numbers come
+    beside it (``stem``_plane.csv: ``NAMES`` and ``PLANE_COLUMNS``, and ``floor`` when given). The numbers come
     from ``regime_tables``, the figure from ``draw_regime_overlay``.
 
     Parameters
@@ -131,12 +135,13 @@ def regime_overlay(cases: pd.DataFrame, model, stem, rules: dict,
     res = draw_regime_overlay(table, plane, stem, excluded, support, floor)
     res.paths["plane"] = res.paths["csv"].with_name(f"{res.paths['csv'].stem}_plane.csv")
     with atomic_path(res.paths["plane"]) as tmp:
-        plane[PLANE_COLUMNS].assign(**({"floor": floor} if floor else {})).to_csv(tmp, index=False)
+        plane[[*design.NAMES, *PLANE_COLUMNS]].assign(**({"floor": floor} if floor else {})).to_csv(tmp, index=False)
     return res
 
 
-def regime_tables(cases: pd.DataFrame, model, rules: dict, f: float = PLANE["f"], v_mm_s: float = PLANE["v_mm_s"], n_d: int = 60,
-                  n_h: int = 40, ranges=None, support=None) -> tuple[pd.DataFrame, pd.DataFrame]:
+def regime_tables(cases: pd.DataFrame, model, rules: dict, f: float = PLANE["f"], v_mm_s: float = PLANE["v_mm_s"],
+                  n_d: int = PLANE_SIZES["d_um"], n_h: int = PLANE_SIZES["h_um"], ranges=None,
+                  support=None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The numbers of the regime overlay: (the cases with a DEM regime, each with its h/d, the
     regime probabilities at its own settings and the most probable regime; the (d, h) plane at
     (f, v), d varying slowest, evaluated for the rule's targets with each regime's probability)."""
@@ -148,16 +153,15 @@ def regime_tables(cases: pd.DataFrame, model, rules: dict, f: float = PLANE["f"]
         raise ValueError(f"the regime map needs the surrogate to model {list(grids.REGIME_TARGETS)}; it lacks "
                          f"{missing} (config surrogate.targets, or a results table without those columns)")
     targets = list(grids.REGIME_TARGETS)
-    at_cases = grids.regime_probabilities(grids.evaluate(model, data[list(NAMES)], targets, support), rules)
+    at_cases = grids.regime_probabilities(grids.evaluate(model, data[list(design.NAMES)], targets, support), rules)
     for c in ("p_normal", "p_jamming", "p_short_feed"):
         data[c] = at_cases[c].to_numpy()
     data["regime_pred"] = most_probable(at_cases)
     data["h_over_d"] = h_over_d(data)
-    d = grids.values(None, n_d, "d_um", ranges)
-    h = grids.values(None, n_h, "h_um", ranges)
-    plane = grids.regime_probabilities(
-        grids.evaluate(model, grids.grid_frame(f=f, d_um=d, h_um=h, v_mm_s=v_mm_s), targets, support), rules)
-    cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(NAMES) + [
+    axes = PLANE_SLICE.axes(ranges=ranges, sizes={"d_um": n_d, "h_um": n_h})
+    frame = PLANE_SLICE.frame(axes, {"f": f, "v_mm_s": v_mm_s}, ranges)
+    plane = grids.regime_probabilities(grids.evaluate(model, frame, targets, support), rules)
+    cols = [c for c in ("case_id", "sweep", "index") if c in data] + list(design.NAMES) + [
         "h_over_d", "mfr", "pd", "regime", "p_normal", "p_jamming", "p_short_feed", "regime_pred"]
     if coarse_ratio(data) is not None:  # a size distribution: the feed's quantiles and h/D90 go with the cases
         cols += ["size_span", "feed_d50_um", "feed_d90_um", "h_over_d90"]
@@ -170,7 +174,6 @@ def draw_regime_overlay(data: pd.DataFrame, plane: pd.DataFrame, stem, excluded:
     cases left out for want of a DEM regime (the title counts them). Saved with the cases' table."""
     counts = regime_counts(data["regime"].to_numpy(), data["regime_pred"].to_numpy())
     d, h = np.unique(plane["d_um"]), np.unique(plane["h_um"])
-    f, v_mm_s = float(plane["f"].iloc[0]), float(plane["v_mm_s"].iloc[0])
     shape = (len(d), len(h))  # d varies slowest
     ratio = coarse_ratio(data)  # D90 / D50 of a size distribution's feed; None: one size
     x_col, x_label = (("h_over_d90", "gap over the feed's D90, h/D90 [-] (a size distribution)") if ratio
@@ -219,7 +222,7 @@ def draw_regime_overlay(data: pd.DataFrame, plane: pd.DataFrame, stem, excluded:
     ax1.legend(handles=handles, fontsize=7.5, loc="lower right", framealpha=0.9)
     ax1.set_xlabel("the powder's D50 [um]" if ratio else BY_NAME["d_um"].label)
     ax1.set_ylabel(BY_NAME["h_um"].label)
-    ax1.set_title(f"Most probable regime of a new run at f = {fmt(f)}, v = {fmt(v_mm_s)} mm/s "
+    ax1.set_title(f"Most probable regime of a new run at {slices.text(PLANE_SLICE.fixed_of(plane))} "
                   f"(shade), probability contours", fontsize=10)
     agree = int(counts["both"].sum())
     fig.suptitle(f"Regimes: the surrogate's most probable regime matches the DEM at {agree} of {len(data)} "

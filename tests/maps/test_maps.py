@@ -396,8 +396,7 @@ def test_maps_redraw_from_their_csv(tmp_path):
     redrawn = [(band, powder_maps.draw_powder_band_map(pd.read_csv(band.paths["csv"]), again / "band", "pd", SUPPORT, ROUGH)),
                (cluster, powder_maps.draw_powder_cluster_map(pd.read_csv(cluster.paths["csv"]), again / "cluster", "coverage",
                                                         SUPPORT, ROUGH)),
-               (mach, machine.draw_machine_map(grid, again / "machine", "pd", 0.3, 20.0, np.unique(grid["h_um"]),
-                                               np.unique(grid["v_mm_s"]), SUPPORT, floor=ROUGH)),
+               (mach, machine.draw_machine_map(grid, again / "machine", "pd", SUPPORT, floor=ROUGH)),
                (reg, regimes.draw_regime_overlay(pd.read_csv(reg.paths["csv"]), pd.read_csv(reg.paths["plane"]),
                                                  again / "regime", 3, SUPPORT, ROUGH))]
     for old, new in redrawn:
