@@ -36,9 +36,15 @@ from yade import (Bo1_Box_Aabb, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Bo
 import yade._utils
 import yade.config
 
+# The case's parameters: the keys spreadmap.case.scene.scene_parameters emits (tests/case/test_scene_parts.py).
+# Two switches of the benchmarks are read only when given (P.get): `timing` (YADE's engine timers,
+# benchmarks/engine_profile.py) and `move_steps_limit` (stop after that many steps of the move).
 # --- case parameters (written by spreadmap's renderer; the values below are a demo case) ---
 PARAMS = {
     "case_id": "demo",
+    "point": {"f": 0.3, "d_um": 40.0, "h_um": 65.0, "v_mm_s": 10.0},
+    "preset": "demo",
+    "scene_sha256": None,
     "friction": 0.3,
     "diameter": 4e-05,
     "gap": 6.5e-05,
@@ -89,13 +95,14 @@ PARAMS = {
     "steady_span": 8e-05,
     "steady_z": 2.0,
     "counting_noise_c": 0.45,
-    "timing": False,
     "freeze_behind_d": None,
     "freeze_speed_ratio": 0.02,
-    "move_steps_limit": None,
     "feed_count": None,
     "feed_zone": 0.00012,
     "feed_offset": 0.0,
+    "contact_time": 2.0e-06,
+    "estimated_steps": 500000,
+    "timeout_s": 600.0,
 }
 # --- end of case parameters ---
 
