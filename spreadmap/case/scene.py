@@ -173,7 +173,13 @@ def material_parameters(point: dict, preset: dict, material: dict, scene: dict) 
         [J/m2] and ``adhesion_gamma`` (the one the scene applies: x density_scale, as the weight, so
         the Bond number is the real powder's), ``size_span``, ``psd_sizes`` [m] and ``psd_cumulative``
         (empty: one size), ``rolling_resistance``, ``rolling_friction`` and ``rolling_stiffness``
-        [N m/rad].
+        [N m/rad], ``side_walls_adhesive``.
+
+    Raises
+    ------
+    ValueError
+        If the side walls are not adhesive (``scene.side_walls_adhesive`` false) with rolling
+        resistance on: the scene cannot take the adhesion off such a contact exactly.
     """
     d = point["d_um"] * 1e-6
     scale = float(preset["density_scale"])
@@ -182,6 +188,10 @@ def material_parameters(point: dict, preset: dict, material: dict, scene: dict) 
     sieves, fractions = psd.sieve_table(d, float(sizes["span"]), sizes["tails"])
     surface_energy = float(material["surface_energy_j_m2"])
     rolling = scene["rolling_resistance"]
+    if not scene["side_walls_adhesive"] and rolling["enabled"]:
+        raise ValueError("config key 'scene.side_walls_adhesive': false is exact only without rolling resistance "
+                         "(the first step of a side-wall contact caps its rolling moment by the adhesive normal "
+                         "force); set scene.rolling_resistance.enabled false, or side_walls_adhesive true")
     # rolling stiffness: stiffness_factor x (Hertz normal stiffness at an overlap of 1e-3 R) x R^2
     r = 0.5 * d
     e_star = material["young_pa"] / (2.0 * (1.0 - material["poisson"] ** 2))
@@ -200,6 +210,8 @@ def material_parameters(point: dict, preset: dict, material: dict, scene: dict) 
         "rolling_resistance": bool(rolling["enabled"]),
         "rolling_friction": float(rolling["rolling_friction"]),
         "rolling_stiffness": float(rolling["stiffness_factor"]) * k_n * r * r,
+        # false: the slice's side walls do not stick (yade_scripts/spreading_case.py, unstick_side_walls)
+        "side_walls_adhesive": bool(scene["side_walls_adhesive"]),
     }
 
 

@@ -18,7 +18,7 @@ from spreadmap.case.render import TEMPLATE, render, rendered_params, template_sh
 
 BEFORE = ROOT / "tests" / "data" / "scene_params_before_split.json"
 # what a case's PARAMS gained since the snapshot, at the values that simulate what it did
-ADDED_SINCE = {}
+ADDED_SINCE = {"side_walls_adhesive": True}  # issue 64: the default, the walls as before
 POINT = {"f": 0.3, "d_um": 30.0, "h_um": 65.0, "v_mm_s": 10.0}
 
 
