@@ -199,7 +199,7 @@ def material_parameters(point: dict, preset: dict, material: dict, scene: dict) 
     return {
         "friction": float(point["f"]),
         # a float whether the config spells it 7980 or 7980.0: one case (spreadmap.case.identity)
-        "density": float(material["density_kg_m3"] * preset["density_scale"]),
+        "density": float(material["density_kg_m3"] * scale),
         "density_scale": scale,
         **{key: float(material[name]) for key, name in MATERIAL.items()},
         "surface_energy": surface_energy,
@@ -406,8 +406,7 @@ def stepping_parameters(point: dict, preset: dict, preset_name: str, config: dic
     """
     material, scene = config["material"], config["scene"]
     d, _, v = _lengths(point)
-    g = material["gravity_m_s2"]
-    density = material["density_kg_m3"] * preset["density_scale"]
+    g, density = physics["gravity"], physics["density"]
     # the step is the smallest sphere's
     d_min = physics["psd_sizes"][0] if physics["psd_sizes"] else d
     dt, dt_crit = time_step(d_min, density, material, preset, preset_name)

@@ -102,3 +102,25 @@ def test_a_folder_its_parameters_do_not_name_is_left_and_reported(config, tmp_pa
     folder.rename(wrong)
     report = carry_to_code_keys(wrong.parent, config)
     assert report == {"renamed": [], "left": [(wrong.name, "the parameters in raw.json are not this folder's")]}
+
+
+def test_the_tool_carries_a_results_folder_once(config, tmp_path):
+    """tools/migrate_case_ids.py on a workflow directory: the bytes-keyed case is renamed to today's
+    id, and a second run renames nothing."""
+    import shutil
+    import subprocess
+    import sys
+
+    from conftest import ROOT
+
+    folder = old_record(config, tmp_path, template=LAST_BYTES)
+    shutil.copy(ROOT / "config.yaml", tmp_path / "config.yaml")
+    tool = [sys.executable, str(ROOT / "tools" / "migrate_case_ids.py"), str(tmp_path)]
+    first = subprocess.run(tool, capture_output=True, text=True, timeout=120)
+    assert first.returncode == 0, first.stderr
+    want = case_id(POINT, "default", config, scene_sha256=CARRIED_TO)
+    assert f"renamed {folder.name} -> {want}" in first.stdout
+    assert "1 case folders keyed by a template's bytes renamed" in first.stdout
+    assert [p.name for p in folder.parent.iterdir()] == [want]
+    again = subprocess.run(tool, capture_output=True, text=True, timeout=120)
+    assert "0 case folders keyed by a template's bytes renamed" in again.stdout
