@@ -1,7 +1,8 @@
 # Parse-time set-up: validate the configuration and register every case the targets can ask for.
 # Per-case values reach the jobs as params from this registry (never through a shared table file,
 # which would re-run every case whenever the table grows). A case is its content (every parameter the
-# YADE script receives: design point, preset values, material, scene, packing seed, template hash;
+# YADE script receives that reaches the simulation: design point, preset values, material, scene, packing
+# seed, the template code's hash; not the timeout or the progress cadence;
 # spreadmap.case.identity): the same content asked for by two sets is one case, run once, and two contents
 # (two materials, two scene versions) are two cases side by side in results/cases/.
 import json

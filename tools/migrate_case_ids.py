@@ -1,7 +1,8 @@
 #!/usr/bin/env python
 """Rename a workflow directory's case folders named before content keys (issue 35) to their content
-ids, then carry the cases of a scene template that today's simulates identically (the dry cases of
-the template before adhesion, issue 49: spreadmap.case.migrate.EQUIVALENT_TEMPLATES) to today's ids,
+ids, then carry the cases keyed by the scene template's bytes (issue 35 to issue 65) of a template
+whose code today's simulates identically (spreadmap.case.migrate.BYTE_HASHED_TEMPLATES: among them
+the dry cases of the template before adhesion, issue 49) to today's ids, keyed by what they simulate,
 without re-running them (spreadmap/case/migrate.py):
 
     .venv/bin/python tools/migrate_case_ids.py WORKDIR [--dry-run]
@@ -19,7 +20,7 @@ import sys
 from pathlib import Path
 
 from spreadmap import config as spreadmap_config
-from spreadmap.case.migrate import carry_to_current_template, migrate_case_folders
+from spreadmap.case.migrate import carry_to_code_keys, migrate_case_folders
 
 
 def main(argv=None) -> int:
@@ -40,12 +41,12 @@ def main(argv=None) -> int:
         print(f"migrate_case_ids: left {old}: {why}")
     print(f"migrate_case_ids: {len(report['renamed'])} case folders {verb}, {len(report['left'])} left as they are")
     config = spreadmap_config.load(args.configfile or args.workdir / "config.yaml")
-    carried = carry_to_current_template(cases, config, dry_run=args.dry_run)
+    carried = carry_to_code_keys(cases, config, dry_run=args.dry_run)
     for old, new in carried["renamed"]:
-        print(f"migrate_case_ids: {verb} {old} -> {new} (an earlier scene template that simulates the same)")
+        print(f"migrate_case_ids: {verb} {old} -> {new} (keyed by the template's bytes; today's code simulates the same)")
     for old, why in carried["left"]:
         print(f"migrate_case_ids: left {old}: {why}")
-    print(f"migrate_case_ids: {len(carried['renamed'])} case folders of an earlier template {verb}")
+    print(f"migrate_case_ids: {len(carried['renamed'])} case folders keyed by a template's bytes {verb}")
     return 0
 
 

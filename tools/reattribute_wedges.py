@@ -28,6 +28,7 @@ from pathlib import Path
 
 from spreadmap import config as cfgmod
 from spreadmap.case.launcher import run_case, write_json_atomically
+from spreadmap.case.migrate import ADDED_SINCE_BYTES
 from spreadmap.case.render import render, template_sha256
 from spreadmap.metrics import case_metrics
 
@@ -54,7 +55,8 @@ def same_simulation(old: dict, new: dict) -> str:
 def reattribute(case_dir: Path, config: dict, dry_run: bool = False) -> dict:
     raw_path, metrics_path = case_dir / "raw.json", case_dir / "metrics.json"
     old = json.loads(raw_path.read_text())
-    params = {**old["params"], "scene_sha256": template_sha256()}
+    # (a record from before the scene's later parameters: at the values that simulate what it ran)
+    params = {**ADDED_SINCE_BYTES, **old["params"], "scene_sha256": template_sha256()}
     with tempfile.TemporaryDirectory(prefix="reattribute-") as tmp:
         script = Path(tmp) / "case.py"
         script.write_text(render(params))

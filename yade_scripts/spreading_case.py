@@ -36,9 +36,15 @@ from yade import (Bo1_Box_Aabb, Bo1_Sphere_Aabb, ForceResetter, FrictMat, Ig2_Bo
 import yade._utils
 import yade.config
 
+# The case's parameters: the keys spreadmap.case.scene.scene_parameters emits (tests/case/test_scene_parts.py).
+# Two switches of the benchmarks are read only when given (P.get): `timing` (YADE's engine timers,
+# benchmarks/engine_profile.py) and `move_steps_limit` (stop after that many steps of the move).
 # --- case parameters (written by spreadmap's renderer; the values below are a demo case) ---
 PARAMS = {
     "case_id": "demo",
+    "point": {"f": 0.3, "d_um": 40.0, "h_um": 65.0, "v_mm_s": 10.0},
+    "preset": "demo",
+    "scene_sha256": None,
     "friction": 0.3,
     "diameter": 4e-05,
     "gap": 6.5e-05,
@@ -89,13 +95,15 @@ PARAMS = {
     "steady_span": 8e-05,
     "steady_z": 2.0,
     "counting_noise_c": 0.45,
-    "timing": False,
     "freeze_behind_d": None,
     "freeze_speed_ratio": 0.02,
-    "move_steps_limit": None,
     "feed_count": None,
     "feed_zone": 0.00012,
     "feed_offset": 0.0,
+    "side_walls_adhesive": True,
+    "contact_time": 2.0e-06,
+    "estimated_steps": 500000,
+    "timeout_s": 600.0,
 }
 # --- end of case parameters ---
 
@@ -185,6 +193,7 @@ box_ids = [O.bodies.append(utils.box((cx, 0.5 * W, floor_top - d), (span, 0.5 * 
                                      mask=SUBSTRATE_MASK if P["substrate"] == "rough" else 1))]
 for yc in (-d, W + d):
     box_ids.append(O.bodies.append(utils.box((cx, yc, 0.5 * z_hi), (span, d, 0.5 * z_hi + d), fixed=True, material=smooth)))
+side_wall_ids = box_ids[1:3]
 # A rough substrate (the previous layer): fixed spheres of the powder's diameter on a hexagonal
 # lattice (seeded offset, rows along x), each lowered by a seeded random depth in
 # [0, substrate_jitter x R], so that their highest points lie in [-jitter R, 0]: z = 0 is the top of
@@ -305,7 +314,7 @@ if P["substrate"] == "rough":
 # overlap. adhesion_gamma is the real surface energy times density_scale (the renderer's), so the
 # scaled weight keeps the real Bond number. It applies to every contact: sphere pairs, the
 # substrate, the floor, the blade, and the frictionless side walls (which hold a sphere against them
-# with a pair's pull-off and let it slide).
+# with a pair's pull-off and let it slide), unless side_walls_adhesive is false (unstick_side_walls).
 ip2 = Ip2_FrictMat_FrictMat_MindlinPhys(en=P["restitution"], es=P["restitution"])
 law = Law2_ScGeom_MindlinPhys_Mindlin()
 if P["adhesion_gamma"] > 0.0:
@@ -318,11 +327,34 @@ if P["rolling_resistance"]:
     law.includeMoment = True
     geometry_functors = [Ig2_Sphere_Sphere_ScGeom6D(), Ig2_Box_Sphere_ScGeom6D()]
 
+
+def unstick_side_walls():
+    """Every step, right after the contact law: a sphere-side-wall contact has no adhesion. YADE's Ip2
+    gives a new contact adhesionForce = 4 pi gamma R* (its `gamma` is one for every contact) and the
+    law subtracts it from the normal force in the very step the contact is made; here, in that same
+    step, its adhesion goes back onto both bodies (the law put -adhesionForce x normal on id2, its
+    opposite on id1) and is set to 0, so that the law treats it as a dry Hertz contact from then on.
+    Exact for a frictionless wall (no shear force, which adhesion would cap otherwise) approached
+    by the sphere, as a new contact is (the law's viscous cap for adhesive contacts then binds
+    nowhere), and without rolling resistance (whose moment cap reads the normal force: refused
+    together by spreadmap.case.scene). Run only with side_walls_adhesive false and adhesion on."""
+    for wall in side_wall_ids:
+        for contact in O.interactions.withBody(wall):
+            phys = contact.phys
+            if phys.adhesionForce != 0.0:
+                pull = phys.adhesionForce * contact.geom.normal
+                O.forces.addF(contact.id2, pull)
+                O.forces.addF(contact.id1, -pull)
+                phys.adhesionForce = 0.0
+
+
 newton = NewtonIntegrator(gravity=(0, 0, -P["gravity"]), damping=P["settle_damping"], label="newton")
 O.engines = [
     ForceResetter(label="reset"),
     InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Box_Aabb()], avoidSelfInteractionMask=AVOID_MASK, label="collider"),
     InteractionLoop(geometry_functors, [ip2], [law], label="interactions"),
+] + ([PyRunner(command="unstick_side_walls()", iterPeriod=1, initRun=True, label="unstick_side_walls")]
+     if P["adhesion_gamma"] > 0.0 and not P["side_walls_adhesive"] else []) + [
     newton,
     PyRunner(command="watchdog()", iterPeriod=int(P["watchdog_every"]), label="watchdog"),
     PyRunner(command="control()", iterPeriod=int(P["control_every"]), label="control"),

@@ -1,12 +1,16 @@
-"""Case identity. A case is its content: every parameter the YADE scene script receives (the design
-point at the precision simulated, the preset's values, the material, the scene settings, the packing
-seed and the hash of the scene template). Two requests for the same content are the same case, run
+"""Case identity. A case is what it simulates: every parameter the YADE scene script receives that
+reaches the simulation (the design point at the precision simulated, the preset's values, the
+material, the scene settings, the packing seed) and the scene template's code
+(spreadmap.case.render.template_sha256). Two requests for the same content are the same case, run
 once; two contents are two cases, side by side in results/cases/, never one overwriting the other.
 
 A case id is readable first, then keyed: `<preset>-f<f>-d<d>-h<h>-v<v>-s<seed>-<key>`, the key
-being 8 hex digits of the SHA-256 of the case's parameters without the fields that only name it
-(content_key). Ids before issue 35 were the readable part alone (LEGACY_CASE_ID_PATTERN): they did
-not say which material or scene a case was run with.
+being 8 hex digits of the SHA-256 of the case's parameters without the fields that only name it or
+only keep its books (NOT_KEYED: its id, the outer timeout, the progress cadence, the step estimate;
+content_key). Ids before issue 35 were the readable part alone (LEGACY_CASE_ID_PATTERN): they did
+not say which material or scene a case was run with. Ids from issue 35 to issue 65 keyed every
+parameter but the id, and the template's bytes (a comment's fix re-keyed every case): the tables
+published then keep them; spreadmap.case.migrate carries such case folders to today's ids.
 """
 from __future__ import annotations
 
@@ -22,6 +26,10 @@ CASE_ID_PATTERN = READABLE_PATTERN + rf"-[0-9a-f]{{{KEY_HEX}}}"
 LEGACY_CASE_ID_PATTERN = READABLE_PATTERN  # a case id before content keys (issue 35)
 # Fields of a case's parameters that name it and do not change what is simulated.
 NAMING_FIELDS = ("case_id",)
+# Fields that keep a case's books and do not change what is simulated either: the launcher's outer
+# timeout, the cadence of the log's progress lines, the step estimate they print (issue 65).
+BOOKKEEPING_FIELDS = ("timeout_s", "progress_every_s", "estimated_steps")
+NOT_KEYED = NAMING_FIELDS + BOOKKEEPING_FIELDS
 # Significant digits of a float in the key: a value computed on another machine may differ in its
 # last bit (a libm's pow or exp), which must not make the same case another one.
 KEY_DIGITS = 12
@@ -128,17 +136,21 @@ def _canonical(value):
     raise TypeError(f"a case parameter of type {type(value).__name__} cannot enter a case's key: {value!r}")
 
 
-def content_key(params: dict) -> str:
+def content_key(params: dict, left_out: tuple[str, ...] = NOT_KEYED) -> str:
     """The key of a case's content: the first KEY_HEX hex digits of the SHA-256 of its parameters.
 
-    The parameters are what the YADE script receives (scene_sha256 included) without the fields that
-    only name it (``NAMING_FIELDS``), as canonical JSON (sorted keys, floats at KEY_DIGITS significant
-    digits; an int and a float of one value give one key).
+    The parameters are what the YADE script receives (scene_sha256, the template's code hash,
+    included) without the fields that only name it or keep its books (``NOT_KEYED``), as canonical
+    JSON (sorted keys, floats at KEY_DIGITS significant digits; an int and a float of one value give
+    one key).
 
     Parameters
     ----------
     params : dict
         The case's parameters (``case_scene``; ``case_id`` may be there or not).
+    left_out : tuple of str, optional
+        The fields left out; default ``NOT_KEYED``. ``NAMING_FIELDS`` gives the key of issue 35 to
+        issue 65 (every parameter but the id), which spreadmap.case.migrate reads old folders by.
 
     Returns
     -------
@@ -151,19 +163,21 @@ def content_key(params: dict) -> str:
         If a parameter value cannot enter a key (not a number, bool, str, None, dict, list, tuple
         or numpy scalar).
     """
-    content = {k: v for k, v in params.items() if k not in NAMING_FIELDS}
+    content = {k: v for k, v in params.items() if k not in left_out}
     text = json.dumps(_canonical(content), sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:KEY_HEX]
 
 
-def keyed_id(params: dict) -> str:
+def keyed_id(params: dict, left_out: tuple[str, ...] = NOT_KEYED) -> str:
     """The case id of a case's parameters: the readable part from its point, preset and seed, then its content key.
 
     Parameters
     ----------
     params : dict
         The case's parameters (``case_scene``): ``point`` (f [-], d_um [um], h_um [um],
-        v_mm_s [mm/s]), ``preset`` and ``seed`` name it; all of them but the naming fields key it.
+        v_mm_s [mm/s]), ``preset`` and ``seed`` name it; all of them but ``left_out`` key it.
+    left_out : tuple of str, optional
+        The fields the key leaves out (``content_key``); default ``NOT_KEYED``.
 
     Returns
     -------
@@ -177,7 +191,7 @@ def keyed_id(params: dict) -> str:
     TypeError
         If a parameter cannot enter the key (``content_key``).
     """
-    return f"{readable_id(params['point'], params['preset'], params['seed'])}-{content_key(params)}"
+    return f"{readable_id(params['point'], params['preset'], params['seed'])}-{content_key(params, left_out)}"
 
 
 def repeat_group(params: dict) -> str:
@@ -225,8 +239,8 @@ def case_scene(point: dict, preset: str, config: dict, seed: int | None = None,
     seed : int or None, optional
         The packing seed; None: the scene's (config ``scene.seed``).
     scene_sha256 : str or None, optional
-        The hash of the scene template; None: ``spreadmap.case.render.template_sha256()`` of the
-        shipped template.
+        The hash of the scene template's code; None: ``spreadmap.case.render.template_sha256()`` of
+        the shipped template.
 
     Returns
     -------
@@ -267,7 +281,7 @@ def case_id(point: dict, preset: str, config: dict, seed: int | None = None, sce
     seed : int or None, optional
         The packing seed; None: the scene's (config ``scene.seed``).
     scene_sha256 : str or None, optional
-        The hash of the scene template; None: that of the shipped template.
+        The hash of the scene template's code; None: that of the shipped template.
 
     Returns
     -------

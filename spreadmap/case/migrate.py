@@ -14,6 +14,10 @@ keeps its modification time, so that Snakemake sees the case as up to date.
 A folder it cannot key (no parameters recorded: a case restored from a published table, or one that
 never rendered; parameters that do not name the folder's own case) is left where it is and reported,
 never deleted; so is a folder whose content id is already taken.
+
+A legacy folder gets the content id of its day (the key of issue 35, over every parameter but the id
+and the template's bytes) unless it records today's template; ``carry_to_code_keys`` then carries
+it, with every case keyed that way, to the key of issue 65 (what it simulates, the template's code).
 """
 from __future__ import annotations
 
@@ -23,7 +27,7 @@ import re
 from pathlib import Path
 
 from ..files import write_text_atomically
-from .identity import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, keyed_id, readable_id
+from .identity import CASE_ID_PATTERN, LEGACY_CASE_ID_PATTERN, NAMING_FIELDS, keyed_id, readable_id
 from .render import rendered_params, template_sha256
 from .scene import overlap_stride
 
@@ -77,7 +81,10 @@ def new_id(folder: Path) -> tuple[str | None, str]:
     if params is None:
         return None, source
     try:
-        named, keyed = readable_id(params["point"], params["preset"], params["seed"]), keyed_id(params)
+        # the key of its day (issue 35's, over the template's bytes); today's for today's template
+        left_out = None if params.get("scene_sha256") == template_sha256() else NAMING_FIELDS
+        named = readable_id(params["point"], params["preset"], params["seed"])
+        keyed = keyed_id(params) if left_out is None else keyed_id(params, left_out)
         # (a case_id already rewritten to the content id: a migration interrupted before the rename)
         if named != folder.name or params.get("case_id") not in (folder.name, keyed):
             return None, f"the parameters in {source} are of case {params.get('case_id')!r}, not of this folder"
@@ -155,22 +162,32 @@ def _rename_case(folder: Path, new: str, dry_run: bool, report: dict) -> bool:
     return True
 
 
-# Scene templates whose cases a later template simulates identically, given the parameters it added:
-# {old template's sha256 (16 hex): (the later template's, the added parameters)}. The template
-# before adhesion (issue 49) and the later ones with surface energy 0 give the same MFR and PD to the
-# bit (tests/case/test_reproduce_published_yade.py); the adhesion change only added adhesion and
-# dropped the monitor's overlap scan (a diagnostic record_overlap makes at every sampled step).
-# 0ae31d5c9de2bce9 is the adhesion template before a correction of its comments (the main job of
-# 2026-12-06 ran on it), e9640a66ef79dc3a the one after; the size distribution (issue 51) added its
-# parameters, and with a span of 0 (one size) takes the one-size path of the earlier templates to the
-# bit (the same test). A template change that alters what a case simulates must not be listed here.
+# The scene templates keyed by their bytes (issue 35 to issue 65) whose cases today's template code
+# simulates identically, given the parameters added since: {template's bytes sha256 (16 hex): the
+# added parameters}. The template before adhesion (issue 49) and the later ones with surface energy 0
+# give the same MFR and PD to the bit (tests/case/test_reproduce_published_yade.py); the adhesion
+# change only added adhesion and dropped the monitor's overlap scan (a diagnostic record_overlap
+# makes at every sampled step). 0ae31d5c9de2bce9 is the adhesion template before a correction of its
+# comments (the main job of 2026-12-06 ran on it), e9640a66ef79dc3a the one after; the size
+# distribution (issue 51) added its parameters, and with a span of 0 (one size) takes the one-size
+# path of the earlier templates to the bit (the same test); 7069f5e574fa3095 is the last template
+# keyed by its bytes. The list is closed: since issue 65 a case is keyed by the template's code
+# (spreadmap.case.render.template_sha256), which a comment does not change.
 ONE_SIZE = {"size_span": 0.0, "psd_sizes": [], "psd_cumulative": []}
-CURRENT_TEMPLATE = "7069f5e574fa3095"
-EQUIVALENT_TEMPLATES = {
-    "2faa01e6a62c2a28": (CURRENT_TEMPLATE, {"surface_energy": 0.0, "adhesion_gamma": 0.0, **ONE_SIZE}),
-    "0ae31d5c9de2bce9": (CURRENT_TEMPLATE, ONE_SIZE),
-    "e9640a66ef79dc3a": (CURRENT_TEMPLATE, ONE_SIZE),
+BYTE_HASHED_TEMPLATES = {
+    "2faa01e6a62c2a28": {"surface_energy": 0.0, "adhesion_gamma": 0.0, **ONE_SIZE},
+    "0ae31d5c9de2bce9": ONE_SIZE,
+    "e9640a66ef79dc3a": ONE_SIZE,
+    "7069f5e574fa3095": {},
 }
+# Parameters every one of them gets: those the scene added since 7069f5e574fa3095, at the values that
+# simulate what it did (issue 64: the side walls adhesive, as every contact was).
+ADDED_SINCE_BYTES = {"side_walls_adhesive": True}
+# The code hash of the template they are carried to: the one shipped with issue 65's key, in the same
+# batch as the side walls' option and the jam record (issue 66: it only reads the contacts, the published
+# median case's MFR and PD the same to the bit). A later change of the template's code re-keys every
+# case, these too (their ids stay those of this code).
+CARRIED_TO = "904561580543e6e3"
 
 
 def with_todays_stride(params: dict, reads_per_contact: int) -> dict:
@@ -187,20 +204,31 @@ def with_todays_stride(params: dict, reads_per_contact: int) -> dict:
     return {**params, "overlap_every": max(int(params["overlap_every"]), today)}
 
 
-def carry_to_current_template(cases_dir: Path | str, config: dict, dry_run: bool = False,
-                              current: str | None = None) -> dict:
-    """Re-key the finished cases of a template that the current one simulates identically, and those
-    that read the peak overlap at another stride (``with_todays_stride``).
+def _named_by(folder: Path, params: dict, reads_per_contact: int) -> bool:
+    """Whether a folder is named by the key of issue 35 of its recorded parameters: as they are, or
+    as an earlier carry (to 7069f5e574fa3095, the added parameters and today's stride) named it
+    while its record kept the ones it ran with."""
+    earlier = with_todays_stride({**params, **BYTE_HASHED_TEMPLATES[params["scene_sha256"]],
+                                  "scene_sha256": "7069f5e574fa3095"}, reads_per_contact)
+    return folder.name in (keyed_id(params, NAMING_FIELDS), keyed_id(earlier, NAMING_FIELDS))
+
+
+def carry_to_code_keys(cases_dir: Path | str, config: dict, dry_run: bool = False) -> dict:
+    """Re-key, once, the finished cases named by the key of issue 35 (over the template's bytes) of
+    a template today's code simulates identically (``BYTE_HASHED_TEMPLATES``) to the key of issue 65
+    (what a case simulates: the template's code ``CARRIED_TO``, without the bookkeeping fields), and
+    those that read the peak overlap at another stride to today's (``with_todays_stride``).
 
     (The adhesive cases of template 0ae31d5c9de2bce9 keep their surface energy: only the template's
-    hash changes in their parameters.)
+    hash and the parameters added since change in their parameters.)
 
     A case folder named by a content id whose recorded parameters (``recorded_params``) name a
-    template listed in ``EQUIVALENT_TEMPLATES`` as leading to the current one gets the id of its
-    parameters under the current template (the listed parameters added, ``scene_sha256`` the
-    current one, the overlap stride today's): the id the workflow asks for, so the case is not re-run.
-    Its raw record keeps the parameters it ran with (its metrics read its own stride). The id inside its text
-    files is rewritten and modification times kept, as ``migrate_case_folders`` does.
+    listed template, and whose name is their key of issue 35 (or an earlier carry's), gets the id of
+    its parameters with the listed ones and ``ADDED_SINCE_BYTES`` added, ``scene_sha256`` =
+    ``CARRIED_TO`` and the overlap stride today's: the id the workflow asks for while the template's
+    code is ``CARRIED_TO``, so the case is not re-run. Its raw record keeps the parameters it ran
+    with (its metrics read its own stride). The id inside its text files is rewritten and
+    modification times kept, as ``migrate_case_folders`` does.
 
     Parameters
     ----------
@@ -211,38 +239,30 @@ def carry_to_current_template(cases_dir: Path | str, config: dict, dry_run: bool
         ``overlap_reads_per_contact`` sets today's stride (a case of a preset it lacks is left alone).
     dry_run : bool, optional
         True: report what would be renamed, change nothing.
-    current : str or None, optional
-        The current template's sha256 (16 hex); None: the shipped template's.
 
     Returns
     -------
     dict
-        ``{"renamed": [(old, new)], "left": [(old, why)]}``; folders of the current template or of
-        a template not listed are not reported.
+        ``{"renamed": [(old, new)], "left": [(old, why)]}``; folders of another template (today's
+        among them) are not reported.
     """
     cases_dir = Path(cases_dir)
-    current = template_sha256() if current is None else current
     report = {"renamed": [], "left": []}
     if not cases_dir.is_dir():
         return report
     for folder in sorted(p for p in cases_dir.iterdir() if p.is_dir() and re.fullmatch(CASE_ID_PATTERN, p.name)):
         params, source = recorded_params(folder)
-        if params is None:
-            continue
-        if params.get("scene_sha256") == current:
-            added = {}
-        elif EQUIVALENT_TEMPLATES.get(params.get("scene_sha256"), (None,))[0] == current:
-            _, added = EQUIVALENT_TEMPLATES[params["scene_sha256"]]
-        else:
+        if params is None or params.get("scene_sha256") not in BYTE_HASHED_TEMPLATES:
             continue
         preset = config["presets"].get(params.get("preset"))
         if preset is None:
             continue
-        new = keyed_id(with_todays_stride({**params, **added, "scene_sha256": current},
-                                          preset["overlap_reads_per_contact"]))
+        reads = preset["overlap_reads_per_contact"]
+        new = keyed_id(with_todays_stride({**params, **BYTE_HASHED_TEMPLATES[params["scene_sha256"]],
+                                           **ADDED_SINCE_BYTES, "scene_sha256": CARRIED_TO}, reads))
         if folder.name == new:  # carried already (its record keeps the old template's parameters)
             continue
-        if keyed_id(params) != folder.name:
+        if not _named_by(folder, params, reads):
             report["left"].append((folder.name, f"the parameters in {source} are not this folder's"))
             continue
         if _rename_case(folder, new, dry_run, report):

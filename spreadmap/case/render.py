@@ -3,6 +3,7 @@ PARAMS block is replaced by the case's parameters, everything else is kept verba
 rendered file is readable and re-runnable by hand with `yade -n -x case.py`."""
 from __future__ import annotations
 
+import ast
 import pprint
 import re
 from pathlib import Path
@@ -13,11 +14,71 @@ _BLOCK = re.compile(r"(# --- case parameters.*?---\n)PARAMS = \{.*?\n\}\n(# --- 
 _RENDERED = re.compile(r"^PARAMS = (\{.*?\})\n# --- end of case parameters ---", re.S | re.M)
 
 
-def template_sha256(template: Path | str = TEMPLATE) -> str:
-    """Content hash of the scene template.
+def _without_docstrings(tree: ast.AST) -> ast.AST:
+    """The tree with the docstring of the module and of every function and class left out (a body
+    that was only its docstring gets `pass`)."""
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Module, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            first = node.body[0] if node.body else None
+            if (isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
+                    and isinstance(first.value.value, str)):
+                node.body = node.body[1:] or [ast.Pass()]
+    return tree
 
-    Part of every case's parameters, so that a change of the scene re-renders and re-runs the cases
-    (and invalidates finished simulations).
+
+def _without_params_values(tree: ast.Module) -> ast.Module:
+    """The tree with the module's `PARAMS = {...}` literal emptied: its values are a demo case's,
+    replaced by each case's own when rendered (and keyed as the case's parameters)."""
+    for node in tree.body:
+        if (isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
+                and node.targets[0].id == "PARAMS"):
+            node.value = ast.Dict(keys=[], values=[])
+    return tree
+
+
+def _dump(node) -> str:
+    """A canonical text of an AST: each node's class and its fields in their order, the fields that
+    are None or empty and the ones newer Pythons add with nothing in them (type_comment, kind,
+    type_params) left out, so that one code dumps the same under Python 3.9-3.13."""
+    if isinstance(node, ast.AST):
+        fields = [f"{name}={_dump(value)}" for name, value in ast.iter_fields(node)
+                  if name not in ("type_comment", "kind", "type_params") and value is not None and value != []]
+        return f"{type(node).__name__}({','.join(fields)})"
+    if isinstance(node, list):
+        return "[" + ",".join(_dump(v) for v in node) + "]"
+    return repr(node)
+
+
+def template_code(text: str) -> str:
+    """The scene template as code: what its parsed text does, without its comments (the parser drops
+    them), its docstrings and the demo values of its PARAMS block.
+
+    Parameters
+    ----------
+    text : str
+        The template's text (Python).
+
+    Returns
+    -------
+    str
+        A canonical dump of its syntax tree (``_dump``): one text for one code, whatever its comments,
+        docstrings, layout or demo parameters.
+
+    Raises
+    ------
+    SyntaxError
+        If the text is not Python.
+    """
+    return _dump(_without_params_values(_without_docstrings(ast.parse(text))))
+
+
+def template_sha256(template: Path | str = TEMPLATE) -> str:
+    """Hash of the scene template's code (``template_code``): part of every case's parameters, so that
+    a change of what the scene does re-keys (re-renders and re-runs) every case, and a change of its
+    comments, docstrings or demo PARAMS does not.
+
+    (Before issue 65 it hashed the template's bytes: a comment's fix re-keyed every case;
+    spreadmap.case.migrate.BYTE_HASHED_TEMPLATES carries the cases of those hashes.)
 
     Parameters
     ----------
@@ -27,11 +88,11 @@ def template_sha256(template: Path | str = TEMPLATE) -> str:
     Returns
     -------
     str
-        The first 16 hex digits of the SHA-256 of the template's bytes.
+        The first 16 hex digits of the SHA-256 of the template's code.
     """
     import hashlib
 
-    return hashlib.sha256(Path(template).read_bytes()).hexdigest()[:16]
+    return hashlib.sha256(template_code(Path(template).read_text()).encode()).hexdigest()[:16]
 
 
 def render(params: dict, template: Path | str = TEMPLATE) -> str:
@@ -88,8 +149,6 @@ def rendered_params(text: str) -> dict:
     ValueError
         When there is no such block, or it is not a literal dict.
     """
-    import ast
-
     match = _RENDERED.search(text)
     if not match:
         raise ValueError("no PARAMS block")

@@ -75,6 +75,70 @@ def test_the_key_changes_with_the_scene_template(config):
 
 
 @pytest.mark.parametrize("path, value", [
+    (("material", "young_pa"), 2.0e9),
+    (("presets", "default", "density_scale"), 10.0),
+    (("material", "surface_energy_j_m2"), 0.0),
+    (("material", "poisson"), 0.25),
+])
+def test_a_changed_physical_value_re_keys(config, path, value):
+    assert _changed(config, path, value) != config
+    assert case_id(POINT, "default", _changed(config, path, value)) != case_id(POINT, "default", config), path
+
+
+def test_the_friction_re_keys(config):
+    """f is in the readable part and in the key (the parameter `friction`)."""
+    _, params = case_scene(POINT, "default", config)
+    assert content_key({**params, "friction": 0.4}) != content_key(params)
+
+
+@pytest.mark.parametrize("path, value", [
+    (("scene", "timeout_factor"), 60),  # the outer timeout
+    (("scene", "progress_every_s"), 1.0),  # the log's progress cadence
+    (("presets", "default", "timeout_s"), 7200),
+])
+def test_the_key_ignores_the_cases_bookkeeping(config, path, value):
+    """The launcher's timeout, the log's progress cadence and the step estimate it prints keep a
+    case's books: the same simulation, the same id (issue 65)."""
+    cid, params = case_scene(POINT, "default", config)
+    other_id, other = case_scene(POINT, "default", _changed(config, path, value))
+    assert other != params and other_id == cid, path
+    assert content_key({**params, "estimated_steps": 1}) == content_key(params)
+
+
+def _template_copy(tmp_path, edit):
+    template = tmp_path / "spreading_case.py"
+    template.write_text(edit((ROOT / "yade_scripts" / "spreading_case.py").read_text()))
+    return template
+
+
+@pytest.mark.parametrize("edit", [
+    lambda t: t + "\n# a comment at the end\n",
+    lambda t: t.replace("import json\n", "import json  # a comment on an import\n", 1),
+    lambda t: t.replace('"""Lay the rough substrate up to x_to', '"""Lay the rough substrate (reworded) up to x_to', 1),
+    lambda t: t.replace('"case_id": "demo",', '"case_id": "another demo", "gap": 1e-4,', 1),  # the demo PARAMS
+])
+def test_a_comment_docstring_or_demo_value_in_the_template_keeps_every_id(config, tmp_path, edit):
+    from spreadmap.case.render import template_sha256
+
+    template = _template_copy(tmp_path, edit)
+    assert template.read_text() != (ROOT / "yade_scripts" / "spreading_case.py").read_text()
+    assert template_sha256(template) == template_sha256()
+    assert case_id(POINT, "default", config, scene_sha256=template_sha256(template)) == case_id(POINT, "default", config)
+
+
+@pytest.mark.parametrize("edit", [
+    lambda t: t + "\nEXTRA = 1\n",
+    lambda t: t.replace("x_lo = -tb - 20.0 * d", "x_lo = -tb - 21.0 * d", 1),
+])
+def test_a_code_change_in_the_template_re_keys(config, tmp_path, edit):
+    from spreadmap.case.render import template_sha256
+
+    template = _template_copy(tmp_path, edit)
+    assert template_sha256(template) != template_sha256()
+    assert case_id(POINT, "default", config, scene_sha256=template_sha256(template)) != case_id(POINT, "default", config)
+
+
+@pytest.mark.parametrize("path, value", [
     (("maps", "resolution"), 7),
     (("surrogate",), {"kind": "something else"}),
     (("converge", "tolerance"), 0.5),

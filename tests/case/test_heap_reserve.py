@@ -11,7 +11,7 @@ from conftest import case_params
 
 from spreadmap.case.scene import standing_reserve_h2
 
-SCENE = {"pile_reserve": 4.7, "pile_reserve_d2": 40.0, "pile_reserve_min": 1.5}
+SCENE = {"pile_reserve": 4.7, "pile_reserve_d2": 40.0, "pile_reserve_min": 1.5, "pile_reserve_d2_from_f": 0.0}
 
 
 @pytest.mark.parametrize("h_over_d, expected", [

@@ -300,7 +300,7 @@ def test_publishing_names_cases_by_the_workflow_directorys_own_template(tmp_path
 
     wf = make_workflow(tmp_path, {"sweeps": {"lds": {"seed": 42, "partitions": [3]}}})
     template = wf / "yade_scripts" / "spreading_case.py"
-    template.write_text(template.read_text() + "# another version of the scene\n")
+    template.write_text(template.read_text() + "ANOTHER_VERSION_OF_THE_SCENE = 1\n")  # code: a comment keys nothing
     cfg = spreadmap_config.load(wf / "config.yaml")
     theirs = planned_sweeps(cfg, scene_sha256=template_sha256(template))["lds"]
     ours = planned_sweeps(cfg)["lds"]
