@@ -29,7 +29,8 @@ from spreadlab.floors_plot import plot_ratio_box, plot_side_by_side
 from spreadmap.case.substrate import FLAT, ROUGH, floor_label, floor_of, mean_hollow_depth
 from spreadmap.config import load
 from spreadmap.design import TARGETS
-from spreadmap.maps.grids import grid_frame, values
+from spreadmap.maps.grids import values
+from spreadmap.slices import REGIME_PLANE
 from spreadmap.surrogate import load_model
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -68,8 +69,8 @@ def main(argv=None) -> int:
     box = compare(model_a, model_b, box_sample(args.points, args.seed, ranges), TARGETS)
     ratio_paths = plot_ratio_box(box, TARGETS, args.out / "ratio_box", names, hollow_d=hollow)
 
-    plane = grid_frame(f=[args.f], d_um=values(None, args.n, "d_um", ranges),
-                       h_um=values(None, args.n, "h_um", ranges), v_mm_s=[args.v])
+    plane = REGIME_PLANE.frame({n: values(None, args.n, n, ranges) for n in REGIME_PLANE.varying},
+                               {"f": args.f, "v_mm_s": args.v}, ranges)
     grid = compare(model_a, model_b, plane, TARGETS)
     fixed = f"f = {args.f:g}, v = {args.v:g} mm/s"
     side_paths = plot_side_by_side(grid, TARGETS, args.out / "side_by_side", names, fixed)

@@ -200,7 +200,7 @@ AXIS_FILES = {
 }
 # files that still enumerate the axes and belong to the refactors running beside this one (issue 65):
 # the case pictures (the scene's spreadmap/case) and the floors' comparison (moving into spreadlab)
-ELSEWHERE = {"spreadmap/case/pictures.py", "tools/compare_floors.py"}
+ELSEWHERE = {"spreadmap/case/pictures.py"}
 
 
 def enumerations(path) -> list[tuple[int, list[str]]]:
