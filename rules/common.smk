@@ -10,7 +10,7 @@ import os
 import sys
 
 from spreadmap import config as spreadmap_config
-from spreadmap.case.identity import CASE_ID_PATTERN, case_scene, rounded
+from spreadmap.case.identity import CASE_ID_PATTERN, SceneParams, case_scene, rounded
 from spreadmap.design import NAMES
 from spreadmap.fidelity.plan import knob_cases, knob_presets, preset_cases
 from spreadmap.sampling import chosen_points

@@ -3,7 +3,7 @@ rule render_case:
     output:
         script="results/cases/{case}/case.py",
     params:
-        scene=lambda wc: CASES[wc.case],
+        scene=lambda wc: SceneParams(CASES[wc.case]),  # not a re-run trigger: the case id holds the scene
     log:
         "results/cases/{case}/render.log",
     localrule: True

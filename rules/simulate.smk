@@ -9,7 +9,7 @@ rule run_case:
     benchmark:
         "results/cases/{case}/benchmark.tsv"
     params:
-        scene=lambda wc: CASES[wc.case],
+        scene=lambda wc: SceneParams(CASES[wc.case]),  # not a re-run trigger: the case id holds the scene
         retries=RETRIES,
     retries: RETRIES
     priority: case_cost_priority

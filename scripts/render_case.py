@@ -5,4 +5,4 @@ from spreadmap.logs import log_to
 
 log_to(snakemake)  # noqa: F821
 
-write_text_atomically(snakemake.output.script, render(snakemake.params.scene))  # noqa: F821
+write_text_atomically(snakemake.output.script, render(snakemake.params.scene.params))  # noqa: F821

@@ -11,7 +11,7 @@ import sys
 from spreadmap.case.launcher import failure_record, retry_wanted, simulate, write_json_atomically
 
 sm = snakemake  # noqa: F821
-params = sm.params.scene
+params = sm.params.scene.params  # spreadmap.case.identity.SceneParams
 result = simulate(params, sm.input.script, sm.output.raw, sm.log[0])
 print(f"{params['case_id']}: {result['outcome']} after {result['wall_time']:.1f} s {result['reason']}")
 if result["outcome"] not in ("ok", "blown"):

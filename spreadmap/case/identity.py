@@ -30,6 +30,18 @@ NAMING_FIELDS = ("case_id",)
 # timeout, the cadence of the log's progress lines, the step estimate they print (issue 65).
 BOOKKEEPING_FIELDS = ("timeout_s", "progress_every_s", "estimated_steps")
 NOT_KEYED = NAMING_FIELDS + BOOKKEEPING_FIELDS
+
+
+class SceneParams:
+    """A case's scene parameters as its rules hand them to their scripts (``.params``), out of sight
+    of Snakemake's params re-run trigger, which records only builtin types: the case's id (its
+    folder) already holds everything the case simulates, so a changed ``timeout_s`` or progress
+    cadence, which the id leaves out, re-renders and re-runs no finished case."""
+
+    __slots__ = ("params",)
+
+    def __init__(self, params: dict):
+        self.params = params
 # Significant digits of a float in the key: a value computed on another machine may differ in its
 # last bit (a libm's pow or exp), which must not make the same case another one.
 KEY_DIGITS = 12
