@@ -10,6 +10,8 @@ the real density) walks toward the stiff limit. Two more arms:
               within noise, or a dimensional parameter of the scene is not scaled.
   x1_316L     density x1 at 316L's own Young's modulus (`--young-316l`, 193 GPa by default; source in
               docs/truth/README.md): one more step toward the stiff limit at ~9.6x the CPU of x1.
+  x1000_walls_dry  the shipped x1000 with the slice's side walls not adhesive (scene.side_walls_adhesive
+              false): the walls' artefact (a real bed has no walls to stick to).
   x1000_p<p>  density x1000 with the applied surface energy gamma x 1000^p instead of the shipped
               Bond-keeping gamma x 1000 (p = 1): p = 0.6 keeps x1's work of separating a contact
               (gamma S (1/S)^(2/5)); the rules pre-registered in docs/truth/README.md.
@@ -40,7 +42,8 @@ POINTS = {"coarse": (0.30, 45.0, 60.0, 10.0), "medium": (0.30, 30.0, 60.0, 10.0)
           "slow": (0.45, 40.0, 70.0, 5.0), "corner": (0.20, 11.0, 75.0, 15.0)}
 # arm -> (density scale, Young's modulus: None = the config's, a number = times the config's, "316L" = --young-316l)
 ARMS = {"x1000": (1000.0, None), "x100": (100.0, None), "x10": (10.0, None), "x1": (1.0, None),
-        "x1_E10": (1.0, 0.1), "x1_316L": (1.0, "316L"), "x1000_p0.8": (1000.0, None), "x1000_p0.6": (1000.0, None)}
+        "x1_E10": (1.0, 0.1), "x1_316L": (1.0, "316L"), "x1000_p0.8": (1000.0, None), "x1000_p0.6": (1000.0, None),
+        "x1000_walls_dry": (1000.0, None)}
 DEFAULT_ARMS = ["x1000", "x100", "x10", "x1", "x1_E10"]
 REFERENCE_ARM = "x1"
 # the order cases run in (a run cut short has whole ladders at the cheap points first); cases of the
@@ -48,6 +51,7 @@ REFERENCE_ARM = "x1"
 PRIORITY = ([("coarse", a) for a in ("x1000", "x100", "x10", "x1_E10", "x1")]
             + [("medium", a) for a in ("x1000", "x100", "x10", "x1")]
             + [(p, a) for p in ("coarse", "medium", "fine") for a in ("x1000_p0.8", "x1000_p0.6")]
+            + [("fine", "x1000"), ("fine", "x1000_walls_dry")]
             + [(p, a) for p in ("fine", "slow") for a in ("x1000", "x100", "x10")]
             + [("slow", "x1"), ("fine", "x1"), ("corner", "x1000"), ("corner", "x100"), ("corner", "x10"),
                ("medium", "x1_316L"), ("corner", "x1")])
@@ -75,6 +79,8 @@ def arm_config(base: dict, arm: str, young_316l: float) -> tuple[dict, str]:
     """The config of an arm and the name of its preset (`default`, or `default_density_scale_<s>`)."""
     scale, young = ARMS[arm]
     cfg = copy.deepcopy(base)
+    if arm == "x1000_walls_dry":
+        cfg["scene"]["side_walls_adhesive"] = False
     exponent = surface_energy_exponent(arm)
     if exponent is not None:  # the scene applies gamma x S: gamma x S^p is the config's gamma x S^(p - 1)
         cfg["material"]["surface_energy_j_m2"] = float(base["material"]["surface_energy_j_m2"]) * scale ** (exponent - 1.0)

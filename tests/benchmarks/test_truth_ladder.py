@@ -67,3 +67,9 @@ def test_316l_arm_changes_the_modulus_alone(base):
 def test_a_bad_exponent_arm_is_refused():
     with pytest.raises(Exception, match="x1000_p"):
         ladder.add_exponent_arm("x100_q0.5")
+
+
+def test_the_walls_arm_changes_the_walls_alone(base):
+    shipped, dry_walls = params(base, "x1000"), params(base, "x1000_walls_dry")
+    assert shipped["side_walls_adhesive"] is True and dry_walls["side_walls_adhesive"] is False
+    assert {k for k in shipped if shipped[k] != dry_walls[k]} == {"side_walls_adhesive", "case_id"}
