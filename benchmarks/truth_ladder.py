@@ -51,14 +51,14 @@ REFERENCE_ARM = "x1"
 PRIORITY = ([("coarse", a) for a in ("x1000", "x100", "x10", "x1_E10", "x1")]
             + [("medium", a) for a in ("x1000", "x100", "x10", "x1")]
             + [(p, a) for p in ("coarse", "medium", "fine") for a in ("x1000_p0.8", "x1000_p0.6")]
-            + [("fine", "x1000"), ("fine", "x1000_walls_dry")]
-            + [(p, a) for p in ("fine", "slow") for a in ("x1000", "x100", "x10")]
-            + [("slow", "x1"), ("fine", "x1"), ("corner", "x1000"), ("corner", "x100"), ("corner", "x10"),
-               ("medium", "x1_316L"), ("corner", "x1")])
+            + [("fine", a) for a in ("x1000", "x1000_walls_dry", "x100", "x10", "x1")]
+            + [("slow", a) for a in ("x1000", "x100", "x10", "x1")]
+            + [("corner", "x1000"), ("corner", "x100"), ("corner", "x10"), ("medium", "x1_316L"), ("corner", "x1")])
 COLUMNS = ("arm", "point", "seed", "case_id", "f", "d_um", "h_um", "v_mm_s", "young_pa", "surface_energy",
            "density_scale", "bond_number", "status", "flagged", "flag_reason", "regime", "mfr", "pd", "mfr_sd",
            "pd_sd", "n_passed", "layer_fill", "coverage", "thickness_ratio", "roughness_d", "flow_trend_z",
-           "n_particles", "steps", "time_step", "peak_overlap_ratio", "cpu_time", "wall_time")
+           "n_particles", "steps", "time_step", "peak_overlap_ratio", "cpu_time", "wall_time", "jam_events",
+           "jam_events_per_mm")
 
 
 def surface_energy_exponent(arm: str) -> float | None:
