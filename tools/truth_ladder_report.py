@@ -95,14 +95,20 @@ def biases(cells: pd.DataFrame) -> pd.DataFrame:
 
 
 def pooled_interval(bias: pd.DataFrame, target: str, level: float = 0.90) -> tuple[float, float, float]:
-    """The mean of the points' biases and its t interval (their spread over the points and their SEs:
-    the larger of the two SEs of the mean), (mean, low, high)."""
+    """The mean of the points' biases and its t interval, (mean, low, high). Its SE is the larger of
+    the points' own SEs (sqrt(sum se^2) / n; the seeds' degrees of freedom) and the biases' spread
+    over the points (their SD / sqrt(n); n - 1 degrees of freedom)."""
     b, se = bias[f"{target}_bias"].to_numpy(float), bias[f"{target}_se"].to_numpy(float)
     n = len(b)
     if n == 0:
         return math.nan, math.nan, math.nan
-    se_mean = max(math.sqrt(np.sum(se ** 2)) / n, (b.std(ddof=1) / math.sqrt(n)) if n > 1 else 0.0)
-    half = stats.t.ppf(0.5 + level / 2, max(n - 1, 1)) * se_mean
+    from_ses = math.sqrt(np.sum(se ** 2)) / n
+    from_spread = b.std(ddof=1) / math.sqrt(n) if n > 1 else 0.0
+    if from_spread > from_ses:
+        se_mean, dof = from_spread, n - 1
+    else:
+        se_mean, dof = from_ses, max(int((bias["seeds"] + bias["ref_seeds"] - 2).sum()), 1)
+    half = stats.t.ppf(0.5 + level / 2, dof) * se_mean
     return float(b.mean()), float(b.mean() - half), float(b.mean() + half)
 
 
@@ -161,7 +167,11 @@ def collapse(bias: pd.DataFrame, cells: pd.DataFrame) -> dict:
     rows["bond"] = rows["surface_energy"] / rows["d_um"] ** 2  # the Bond number ~ gamma / d^2 (one density, g)
     out = {}
     for name in ("bond", "w_over_k"):
-        fit = stats.linregress(np.log10(rows[name].to_numpy(float)), rows["mfr_rel"].to_numpy(float))
+        x = np.log10(rows[name].to_numpy(float))
+        if np.ptp(x) == 0:  # one Bond number (one point so far): no line to fit
+            out[name] = {"r2": math.nan, "slope": math.nan, "n": len(rows)}
+            continue
+        fit = stats.linregress(x, rows["mfr_rel"].to_numpy(float))
         out[name] = {"r2": fit.rvalue ** 2, "slope": fit.slope, "n": len(rows)}
     out["rows"] = rows
     return out
