@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from spreadlab.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
+from spreadlab.experiments.arms import add_arguments, arm_summary, number, run_arm_case, run_study
 from spreadmap import config as spreadmap_config
 from spreadmap.files import write_text_atomically
 
@@ -108,24 +108,13 @@ def main() -> None:
     add_arguments(ap, POINTS, ARMS, DEFAULT_ARMS, "/tmp/adhesion_scaling")
     args = ap.parse_args()
     base = spreadmap_config.load(args.config)
-    out = Path(args.csv)
-    rows = read_rows(out)
-    if not args.summary_only:
-        # cheapest first: coarse before fine, x1000 before x10
-        todo = pending(rows, args, lambda j: (-ARMS[j[0]][1], -POINTS[j[1]][1], j[2]))
-        jobs = [{"base": base, "arm": a, "point": p, "seed": s, "gamma": args.gamma, "keep": args.keep,
-                 "rolling_eta": args.rolling_eta} for a, p, s in todo]
-        print(f"{len(jobs)} cases to run ({len(rows)} already in {out})", flush=True)
-        run_jobs(jobs, run_one, rows, out, COLUMNS, workers=args.workers, describe=lambda row: (
-            f"{row['arm']:10s} {row['point']:7s} s{row['seed']} {row.get('status')} mfr {number(row.get('mfr')):.4f} "
-            f"pd {number(row.get('pd')):.4f} Bo {number(row.get('bond_number')):.2f} cpu {row['cpu_time']:.0f} s "
-            f"{row.get('flag_reason') or ''}"))
-    text = summary(read_rows(out))
-    print(text)
-    if args.summary:
-        write_text_atomically(Path(args.summary), text)
+    # cheapest first: coarse before fine, x1000 before x10
+    rows = run_study(args, lambda j: (-ARMS[j[0]][1], -POINTS[j[1]][1], j[2]),
+                     lambda a, p, s: {"base": base, "arm": a, "point": p, "seed": s, "gamma": args.gamma,
+                                      "keep": args.keep, "rolling_eta": args.rolling_eta},
+                     run_one, COLUMNS, summary, extra=lambda row: f"Bo {number(row.get('bond_number')):.2f}")
     if args.correction:
-        corr = density_correction(read_rows(out))
+        corr = density_correction(rows)
         write_text_atomically(Path(args.correction), json.dumps(corr, indent=1, default=float) + "\n")
         print(json.dumps(corr["config_block"], indent=1))
 

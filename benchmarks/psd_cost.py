@@ -24,9 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from spreadlab.experiments.arms import add_arguments, arm_summary, number, pending, read_rows, run_arm_case, run_jobs
+from spreadlab.experiments.arms import add_arguments, arm_summary, number, run_arm_case, run_study
 from spreadmap import config as spreadmap_config
-from spreadmap.files import write_text_atomically
 
 ROOT = Path(__file__).resolve().parent.parent
 POINTS = {"fine": (0.30, 15.0, 60.0, 10.0), "medium": (0.30, 30.0, 60.0, 10.0), "coarse": (0.30, 45.0, 60.0, 10.0)}
@@ -81,22 +80,12 @@ def main() -> None:
     add_arguments(ap, POINTS, ARMS, ARMS, "/tmp/psd_cost")
     args = ap.parse_args()
     base = spreadmap_config.load(args.config)
-    out = Path(args.csv)
-    rows = read_rows(out)
-    if not args.summary_only:
-        cost = {"one_size": 0, "span1_d5": 1, "span1_d1": 2}  # cheapest first: one size, coarse first
-        todo = pending(rows, args, lambda j: (cost[j[0]], -POINTS[j[1]][1], j[2]))
-        jobs = [{"base": base, "arm": a, "point": p, "seed": s, "span": args.span, "keep": args.keep} for a, p, s in todo]
-        print(f"{len(jobs)} cases to run ({len(rows)} already in {out})", flush=True)
-        run_jobs(jobs, run_one, rows, out, COLUMNS, workers=args.workers, describe=lambda row: (
-            f"{row['arm']:9s} {row['point']:7s} s{row['seed']} {row.get('status')} mfr {number(row.get('mfr')):.4f} "
-            f"pd {number(row.get('pd')):.4f} h/D90 {number(row.get('h_over_d90')):.2f} "
-            f"D50 ratio {number(row.get('layer_d50_ratio')):.3f} n {row.get('n_particles')} cpu {row['cpu_time']:.0f} s "
-            f"{row.get('flag_reason') or ''}"))
-    text = summary(read_rows(out))
-    print(text)
-    if args.summary:
-        write_text_atomically(Path(args.summary), text)
+    cost = {"one_size": 0, "span1_d5": 1, "span1_d1": 2}  # cheapest first: one size, coarse first
+    run_study(args, lambda j: (cost[j[0]], -POINTS[j[1]][1], j[2]),
+              lambda a, p, s: {"base": base, "arm": a, "point": p, "seed": s, "span": args.span, "keep": args.keep},
+              run_one, COLUMNS, summary, extra=lambda row: (
+                  f"h/D90 {number(row.get('h_over_d90')):.2f} D50 ratio {number(row.get('layer_d50_ratio')):.3f} "
+                  f"n {row.get('n_particles')}"))
 
 
 if __name__ == "__main__":

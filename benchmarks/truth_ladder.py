@@ -32,9 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from spreadlab.experiments.arms import add_arguments, arm_summary, number, read_rows, run_arm_case, run_jobs
+from spreadlab.experiments.arms import add_arguments, arm_summary, number, run_arm_case, run_study
 from spreadmap import config as spreadmap_config
-from spreadmap.files import write_text_atomically
 
 ROOT = Path(__file__).resolve().parent.parent
 # f, d_um, h_um, v_mm_s: Bond number 3.8 to ~60 (d 45 to 11 um), h/d 1.3 to 6.8, a slow and a fast blade
@@ -131,23 +130,9 @@ def main() -> None:
     ap.set_defaults(seeds=[1, 2, 3])
     args = ap.parse_args()
     base = spreadmap_config.load(args.config)
-    out = Path(args.csv)
-    rows = read_rows(out)
-    if not args.summary_only:
-        done = {(r["arm"], r["point"], int(r["seed"])) for r in rows}
-        todo = sorted(((a, p, s) for a in args.arms for p in args.points for s in args.seeds
-                       if (a, p, s) not in done), key=order)
-        jobs = [{"base": base, "arm": a, "point": p, "seed": s, "keep": args.keep, "young_316l": args.young_316l}
-                for a, p, s in todo]
-        print(f"{len(jobs)} cases to run ({len(rows)} already in {out})", flush=True)
-        run_jobs(jobs, run_one, rows, out, COLUMNS, workers=args.workers, describe=lambda row: (
-            f"{row['arm']:8s} {row['point']:7s} s{row['seed']} {row.get('status')} mfr {number(row.get('mfr')):.4f} "
-            f"pd {number(row.get('pd')):.4f} Bo {number(row.get('bond_number')):.1f} cpu {row['cpu_time']:.0f} s "
-            f"{row.get('flag_reason') or ''}"))
-    text = summary(read_rows(out))
-    print(text)
-    if args.summary:
-        write_text_atomically(Path(args.summary), text)
+    run_study(args, order, lambda a, p, s: {"base": base, "arm": a, "point": p, "seed": s, "keep": args.keep,
+                                            "young_316l": args.young_316l},
+              run_one, COLUMNS, summary, extra=lambda row: f"Bo {number(row.get('bond_number')):.1f}")
 
 
 if __name__ == "__main__":

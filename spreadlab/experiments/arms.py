@@ -111,6 +111,28 @@ def run_jobs(jobs: list[dict], run_one: Callable[[dict], dict], rows: list[dict]
     return rows
 
 
+def run_study(args, order_key, job_of: Callable[[str, str, int], dict], run_one: Callable[[dict], dict], columns,
+              summarise: Callable[[list[dict]], str], extra: Callable[[dict], str] = lambda row: "") -> list[dict]:
+    """An arms study's main loop: the asked cases not yet in ``args.csv`` (``pending``, sorted by
+    `order_key`) run two at a time (``run_jobs``; each row printed with its arm, point, seed, status,
+    MFR, PD, `extra(row)`, CPU and flag), then the summary (`summarise` of every row) printed and
+    written to ``args.summary`` when given. Returns the table's rows."""
+    out = Path(args.csv)
+    rows = read_rows(out)
+    if not args.summary_only:
+        jobs = [job_of(a, p, s) for a, p, s in pending(rows, args, order_key)]
+        print(f"{len(jobs)} cases to run ({len(rows)} already in {out})", flush=True)
+        run_jobs(jobs, run_one, rows, out, columns, workers=args.workers, describe=lambda row: (
+            f"{row['arm']:10s} {row['point']:7s} s{row['seed']} {row.get('status')} mfr {number(row.get('mfr')):.4f} "
+            f"pd {number(row.get('pd')):.4f} {extra(row)} cpu {row['cpu_time']:.0f} s {row.get('flag_reason') or ''}"))
+    rows = read_rows(out)
+    text = summarise(rows)
+    print(text)
+    if args.summary:
+        write_text_atomically(Path(args.summary), text)
+    return rows
+
+
 def mean_se(group: list[dict], key: str) -> tuple[float, float, int]:
     """Mean of a column over rows, its SE from their spread (NaN with one row), and the count."""
     x = np.array([number(r.get(key)) for r in group])
