@@ -196,7 +196,6 @@ def report(cases: pd.DataFrame) -> tuple[str, dict]:
         for r in bias.itertuples():
             lines.append(f"| {r.point} | {r.arm} | {r.reference} | {r.mfr_bias:+.4f} ± {r.mfr_se:.4f} ({r.mfr_z:+.1f}) | "
                          f"{100 * r.mfr_rel:+.1f} % | {r.pd_bias:+.4f} ± {r.pd_se:.4f} ({r.pd_z:+.1f}) |")
-    eq = bias[(bias["arm"] == "x1_E10")] if not bias.empty else bias
     here = cells.set_index(["point", "arm"])
     lines += ["", "## Equivalence: x1_E10 against x10", ""]
     eq_rows = [(p, here.loc[(p, "x1_E10")], here.loc[(p, "x10")]) for p in cells["point"].unique()
@@ -208,7 +207,6 @@ def report(cases: pd.DataFrame) -> tuple[str, dict]:
                          + ("equal within 2 SE" if abs(d) <= 2 * se else "NOT equal within 2 SE"))
     if not eq_rows:
         lines.append("Not measured yet.")
-    del eq
     points_with_ref = sorted(set(bias["point"])) if not bias.empty else []
     level, reasons = truth_level(bias, points_with_ref) if points_with_ref else (None, ["no point has x1 yet"])
     lines += ["", "## The truth level", "",
