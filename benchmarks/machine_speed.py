@@ -68,7 +68,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="the median case only")
     args = ap.parse_args(argv)
     cfg = spreadmap_config.load(args.config)
-    chosen = reference_cases(pd.read_csv(args.cases), args.quick)
+    chosen = reference_cases(pd.read_csv(args.cases, float_precision="round_trip"), args.quick)  # to the bit
     ratios = []
     with tempfile.TemporaryDirectory(prefix="machine_speed_") as tmp:
         for _, row in chosen.iterrows():
