@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from spreadmap.design import NAMES
+from spreadmap.design import NAMES, TARGETS  # mfr, pd
 from spreadmap.files import write_text_atomically
 from spreadmap.table import usable_cases
 
@@ -30,7 +30,6 @@ STIFFEST = ["x1_316L", "x1"]            # the reference at a point: the first of
 FIT_POINTS = ["coarse", "medium", "fine"]
 HELD_OUT = ["slow", "corner"]
 EXPONENT_ARMS = {1.0: "x1000", 0.8: "x1000_p0.8", 0.6: "x1000_p0.6"}
-TARGETS = ["mfr", "pd"]
 POOLED_MARGIN = 0.01   # the truth level's pooled mean bias: 90 % CI inside +- this
 Z_BOUND = 2.0
 
